@@ -1,0 +1,9 @@
+"""shapecond: how hard is a shape to match, why, and where to put landmarks.
+
+Reproduces and extends Ovsjanikov, Huang and Guibas, *A Condition Number for
+Non-Rigid Shape Matching*, SGP 2011.  Data flows one way::
+
+    input -> metric shape -> scores -> landmarks -> matching -> evaluation
+"""
+
+__version__ = "0.1.0"

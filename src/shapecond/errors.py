@@ -1,0 +1,19 @@
+"""Error types shared by the library and the command line.
+
+``InputError`` is raised for anything wrong with what the user gave us (a
+broken mesh, landmarks out of range, a non-square distance matrix...).  The
+command line turns it into one ``error: ...`` line on stderr and exit status 2.
+Any other exception is an internal failure (exit status 1).
+"""
+
+
+class ShapecondError(Exception):
+    """Base class of the errors raised on purpose by shapecond."""
+
+
+class InputError(ShapecondError, ValueError):
+    """The user's input cannot be used; the message says why in one line."""
+
+
+class TooLargeError(InputError):
+    """A computation was refused because it would exceed a measured size limit."""
