@@ -1,0 +1,103 @@
+"""PLY files with per-vertex colours for MeshLab or Blender (issue 6 item 4).
+
+The file is written atomically (temporary file, then rename) with trimesh's exporter,
+``process=False`` so that the vertex order, and with it every vertex id, is kept.
+Scalars are turned into colours with a matplotlib colour map; landmarks can be painted
+on top (first three red, the rest green, as the paper's Figure 6) together with their
+one-ring so that they are visible in a viewer.
+"""
+
+from __future__ import annotations
+
+import os
+
+import matplotlib
+import numpy as np
+import trimesh
+
+from ..errors import InputError
+
+
+def scalar_colours(values, cmap: str = "viridis", vmin=None, vmax=None) -> np.ndarray:
+    """Map scalars (n,) to uint8 RGBA colours (n, 4); non-finite values get the top colour."""
+    v = np.asarray(values, dtype=float)
+    finite = v[np.isfinite(v)]
+    lo = vmin if vmin is not None else (float(finite.min()) if finite.size else 0.0)
+    hi = vmax if vmax is not None else (float(finite.max()) if finite.size else 1.0)
+    if hi <= lo:
+        hi = lo + 1.0
+    sm = matplotlib.cm.ScalarMappable(norm=matplotlib.colors.Normalize(lo, hi), cmap=cmap)
+    rgba = sm.to_rgba(np.where(np.isfinite(v), v, hi))
+    return np.round(np.asarray(rgba) * 255).astype(np.uint8)
+
+
+def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, cmap="viridis",
+              vmin=None, vmax=None, ring: bool = True) -> str:
+    """Write a PLY with per-vertex colours.
+
+    Parameters
+    ----------
+    path : str or path-like
+    vertices : (n, 3) array
+    faces : (m, 3) int array or None
+        ``None`` writes a point cloud.
+    values : (n,) scalars, (n, 3|4) colours (floats in [0, 1] or uint8), or None (grey)
+    landmarks : sequence of int
+        Internal vertex indices in order; painted red (first three) and green (rest).
+    ring : bool
+        Also paint the landmarks' neighbouring vertices (meshes only).
+
+    Returns
+    -------
+    str
+        The path written.
+    """
+    V = np.asarray(vertices, dtype=float)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise InputError("vertices must be an (n, 3) array")
+    n = V.shape[0]
+    if values is None:
+        colours = np.tile(np.array([190, 190, 190, 255], np.uint8), (n, 1))
+    else:
+        v = np.asarray(values)
+        if v.ndim == 1:
+            if v.shape[0] != n:
+                raise InputError(f"values must have {n} entries, got {v.shape[0]}")
+            colours = scalar_colours(v, cmap, vmin, vmax)
+        elif v.ndim == 2 and v.shape[0] == n and v.shape[1] in (3, 4):
+            c = v.astype(float)
+            if v.dtype.kind == "f":
+                c = np.round(np.clip(c, 0, 1) * 255)
+            colours = np.full((n, 4), 255, np.uint8)
+            colours[:, : v.shape[1]] = c.astype(np.uint8)
+        else:
+            raise InputError(f"values must have shape ({n},) or ({n}, 3|4), got {v.shape}")
+    F = None if faces is None else np.asarray(faces, dtype=np.int64)
+    nbrs = None
+    if F is not None and ring and len(landmarks):
+        nbrs = trimesh.Trimesh(V, F, process=False).vertex_neighbors
+    for i, vid in enumerate(landmarks):
+        vid = int(vid)
+        if not 0 <= vid < n:
+            raise InputError(f"landmark vertex index {vid} out of range")
+        c = np.array([230, 20, 20, 255] if i < 3 else [30, 200, 30, 255], np.uint8)
+        colours[vid] = c
+        if nbrs is not None:
+            colours[list(nbrs[vid])] = c
+    if F is None:
+        obj = trimesh.PointCloud(V, colors=colours)
+    else:
+        obj = trimesh.Trimesh(V, F, vertex_colors=colours, process=False)
+    data = obj.export(file_type="ply")
+    path = os.fspath(path)
+    d = os.path.dirname(os.path.abspath(path))
+    os.makedirs(d, exist_ok=True)
+    tmp = os.path.join(d, f".{os.path.basename(path)}.tmp{os.getpid()}")
+    try:
+        with open(tmp, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    return path
