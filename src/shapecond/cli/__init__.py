@@ -1,0 +1,75 @@
+"""The ``shapecond`` command: one group, one module per sub-command.
+
+Sub-commands live in ``shapecond/cli/cmd_*.py``, each exporting a click command
+named ``command``; they are discovered here.  Every user error (``InputError``,
+a bad option) becomes one ``error: ...`` line on stderr and exit status 2; any
+other failure is internal (exit status 1; set ``SHAPECOND_DEBUG=1`` for the
+traceback).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import pkgutil
+import sys
+
+import click
+
+from .. import __version__
+from ..errors import InputError
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="shapecond")
+def cli():
+    """How hard is a shape to match, why, and where to put landmarks.
+
+    INPUT is a mesh (OFF, OBJ, PLY, STL, TOSCA .vert/.tri), a point cloud (.xyz,
+    .txt, .npy of shape (n, 3), PLY without faces), an N x N distance matrix
+    (.npy) or a generated shape demo:NAME (animal, sphere, torus, cylinder, blob,
+    plane), e.g. demo:animal:delta=0.05.
+    """
+
+
+def _register() -> None:
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if info.name.startswith("cmd_"):
+            module = importlib.import_module(f"{__name__}.{info.name}")
+            cli.add_command(module.command)
+
+
+_register()
+
+
+def _fail(message: str, status: int) -> None:
+    click.echo(f"error: {message}", err=True)
+    sys.exit(status)
+
+
+def main(argv=None) -> None:
+    """Console-script entry point."""
+    try:
+        status = cli.main(args=argv, prog_name="shapecond", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as exc:  # bare `shapecond` or `shapecond CMD`: show help
+        click.echo(exc.ctx.get_help() if exc.ctx else str(exc))
+        sys.exit(0)
+    except click.UsageError as exc:
+        hint = f" (see: shapecond {exc.ctx.info_name} --help)" if exc.ctx and exc.ctx.parent else ""
+        _fail(exc.format_message().splitlines()[0] + hint, 2)
+    except click.exceptions.Exit as exc:
+        sys.exit(exc.exit_code)
+    except click.Abort:
+        _fail("aborted", 130)
+    except InputError as exc:
+        _fail(str(exc).splitlines()[0] if str(exc) else "bad input", 2)
+    except MemoryError:
+        _fail("out of memory; try fewer --points", 1)
+    except BrokenPipeError:
+        sys.exit(1)
+    except Exception as exc:  # internal failure: one line unless debugging
+        if os.environ.get("SHAPECOND_DEBUG"):
+            raise
+        _fail(f"internal failure: {exc.__class__.__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
+              " (set SHAPECOND_DEBUG=1 for details)", 1)
+    sys.exit(status if isinstance(status, int) else 0)
