@@ -129,7 +129,18 @@ def read_mesh_arrays(path: Path):
             faces = None
     if vertices.shape[0] == 0:
         raise InputError(f"{path.name}: no vertices found (empty, truncated or not a mesh)")
+    if path.suffix.lower() == ".stl" and faces is not None:
+        vertices, faces = _merge_stl_corners(vertices, faces)
     return vertices, faces
+
+
+def _merge_stl_corners(vertices: np.ndarray, faces: np.ndarray):
+    """STL stores three corners per triangle: merge equal corners, numbered by first use."""
+    _, first, inverse = np.unique(vertices, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return vertices[first[order]], rank[inverse.ravel()][faces]
 
 
 def suffix_is_cloud_capable(path: Path) -> bool:

@@ -1,0 +1,67 @@
+"""The command line of the foundation: info, sample, demo and the error contract."""
+
+import json
+
+import numpy as np
+import pytest
+
+from shapecond.cli import main
+
+
+def run(capsys, *argv):
+    with pytest.raises(SystemExit) as exit_info:
+        main(list(argv))
+    out, err = capsys.readouterr()
+    return exit_info.value.code, out, err
+
+
+def test_info_json_on_generated_shape(capsys):
+    code, out, err = run(capsys, "info", "demo:sphere", "--json")
+    assert code == 0
+    report = json.loads(out)
+    assert report["n_vertices"] == 2562 and report["components"] == 1 and report["problems"] == []
+
+
+def test_info_reports_problems_without_failing(tmp_path, capsys):
+    path = tmp_path / "two.off"
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [5, 5, 5], [6, 5, 5], [5, 6, 5], [9, 9, 9]], float)
+    F = [[0, 1, 2], [3, 4, 5]]
+    path.write_text("OFF\n7 2 0\n" + "\n".join(" ".join(map(str, v)) for v in V) + "\n"
+                    + "\n".join(f"3 {a} {b} {c}" for a, b, c in F) + "\n")
+    code, out, _ = run(capsys, "info", str(path), "--json")
+    report = json.loads(out)
+    assert code == 0 and report["components"] == 2 and report["isolated_vertices"] == 1
+    assert report["boundary_edges"] == 6 and any("2 connected" in p for p in report["problems"])
+
+
+def test_sample_writes_npz_with_file_ids(tmp_path, capsys):
+    out_path = tmp_path / "s.npz"
+    code, out, _ = run(capsys, "sample", "demo:blob:subdivisions=3", "--points", "30", "--landmarks", "7,3",
+                       "-o", str(out_path), "--json")
+    assert code == 0 and json.loads(out)["n_points"] == 30
+    with np.load(out_path) as z:
+        assert z["D"].shape == (30, 30) and list(z["samples"][:2]) == [7, 3]
+
+
+@pytest.mark.parametrize("argv,match", [
+    (["sample", "demo:sphere", "--points", "5000", "-o", "OUT"], "fewer than"),
+    (["sample", "demo:sphere", "--points", "10", "--landmarks", "999999", "-o", "OUT"], "not a vertex"),
+    (["sample", "demo:sphere", "--points", "10", "--landmarks", "4,4", "-o", "OUT"], "repeated"),
+    (["sample", "demo:sphere", "--points", "2", "-o", "OUT"], "at least 3"),
+    (["sample", "demo:nosuchshape", "-o", "OUT"], "unknown generated shape"),
+    (["sample", "demo:sphere", "--bogus", "-o", "OUT"], "No such option"),
+    (["info", "missing.off"], "no such file"),
+])
+def test_bad_input_is_one_error_line_exit_2_and_no_file(tmp_path, capsys, argv, match):
+    argv = [str(tmp_path / "out.npz") if a == "OUT" else a for a in argv]
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and match in lines[0]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_json(capsys):
+    code, out, _ = run(capsys, "demo", "--points", "60", "--json")
+    summary = json.loads(out)
+    assert code == 0 and summary["n_points"] == 60 and summary["covering_radius"] > 0
