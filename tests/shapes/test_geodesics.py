@@ -43,3 +43,8 @@ def test_point_cloud_heat_and_refusals():
         DistanceSolver(cloud, "fmm")
     with pytest.raises(InputError, match="unknown geodesic backend"):
         DistanceSolver(g, "dijkstra")
+
+
+def test_exact_backend_on_sphere():
+    pytest.importorskip("gdist")
+    assert _great_circle_error("exact", 3) < 0.005
