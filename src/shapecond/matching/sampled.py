@@ -1,0 +1,200 @@
+"""A sampled surface for matching: FPS samples with their full distance rows.
+
+Matching works on the N × N sample distances ``D``, but the dense extension
+(``dense.py``) and the error metrics (``metrics.py``) also need the distance
+from every sample to every vertex: the ``(N, n)`` *rows*.  Farthest-point
+sampling computes exactly these rows, so ``sample_surface`` records them while
+it runs ``shapecond.shapes.sampling.farthest_point_sampling`` (same samples as
+``metric_shape`` with the same arguments, hence the same samples the landmark
+methods see) and caches them on disk beside the metric-shape cache.
+
+Units.  Matching compares distances *across* two shapes, so both must be in
+the same units.  Scaling each shape to diameter 1 (as ``MetricShape`` does)
+injects an error whenever a pose changes the diameter (a cat curling its
+tail); area is preserved by isometries, so ``D`` here is raw distance divided
+by ``sqrt(area)`` for meshes (the Princeton benchmark's normaliser) and by the
+raw sample diameter for point clouds.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from shapecond.errors import InputError
+from shapecond.shapes.geodesics import DistanceSolver
+from shapecond.shapes.geometry import Geometry
+from shapecond.shapes.metric import cache_dir
+from shapecond.shapes.sampling import farthest_point_sampling
+from shapecond.shapes.validate import face_areas
+
+CACHE_VERSION = "matching-rows-1"
+
+
+@dataclass(frozen=True, eq=False)
+class SampledSurface:
+    """Samples of one shape with the distances from each sample to every vertex.
+
+    Attributes
+    ----------
+    geometry : Geometry
+    samples : (N,) int64 internal vertex indices (landmarks first when given).
+    rows : (N, n) float32 raw distances from each sample to every vertex.
+    unit : float, ``sqrt(area)`` (mesh) or the raw sample diameter (point cloud).
+    backend : str, the geodesic backend that produced ``rows``.
+    """
+
+    geometry: Geometry
+    samples: np.ndarray
+    rows: np.ndarray
+    unit: float
+    backend: str
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.samples.size)
+
+    @property
+    def D(self) -> np.ndarray:
+        """(N, N) symmetrised sample distances in units of ``unit``."""
+        R = self.rows[:, self.samples].astype(np.float64)
+        R = 0.5 * (R + R.T)
+        np.fill_diagonal(R, 0.0)
+        return R / self.unit
+
+    @property
+    def diameter(self) -> float:
+        """Raw geodesic diameter estimate: the largest sample-to-vertex distance."""
+        return float(self.rows.max())
+
+    @property
+    def nearest(self) -> np.ndarray:
+        """(n,) index of every vertex's nearest sample."""
+        return np.argmin(self.rows, axis=0)
+
+
+def surface_unit(geometry: Geometry, raw_diameter: float) -> float:
+    """``sqrt(total area)`` for a mesh, ``raw_diameter`` for a point cloud."""
+    if geometry.faces is not None:
+        area = float(face_areas(geometry.vertices, geometry.faces).sum())
+        if area > 0:
+            return float(np.sqrt(area))
+    if not raw_diameter > 0:
+        raise InputError(f"{geometry.name}: zero diameter")
+    return float(raw_diameter)
+
+
+class _RecordingSolver:
+    """Wraps a DistanceSolver and keeps every row it returns (keyed by source)."""
+
+    def __init__(self, solver: DistanceSolver):
+        self.solver, self.n, self.kept = solver, solver.n, {}
+
+    def distances(self, sources):
+        out = self.solver.distances(sources)
+        for s, row in zip(np.atleast_1d(sources), out):
+            self.kept[int(s)] = row.astype(np.float32)
+        return out
+
+
+def _key(geometry: Geometry, n_points: int, backend: str, seed: int, landmarks) -> str:
+    h = hashlib.sha256()
+    for arr in (geometry.vertices, geometry.faces, geometry.ids):
+        h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
+    h.update(repr((CACHE_VERSION, n_points, backend, seed, tuple(landmarks))).encode())
+    return h.hexdigest()[:32]
+
+
+def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat", seed: int = 0,
+                   landmarks=(), cache: bool = True, solver: DistanceSolver | None = None
+                   ) -> SampledSurface:
+    """FPS-sample ``geometry`` (landmarks first) and keep the distance rows.
+
+    Parameters
+    ----------
+    geometry : Geometry
+    n_points : int
+        N, the number of samples (the paper's 400).
+    backend : str
+        Geodesic backend (``shapecond.shapes.geodesics``).
+    seed : int
+        Seed of FPS's random start.
+    landmarks : sequence of int
+        Internal vertex indices placed first.
+    cache : bool
+        Read/write ``<cache_dir>/matching-<key>.npz``.
+    """
+    if n_points > geometry.n_vertices:
+        raise InputError(f"{geometry.name} has {geometry.n_vertices} vertices, fewer than the "
+                         f"{n_points} samples requested")
+    landmarks = tuple(int(v) for v in landmarks)
+    path = Path(cache_dir()) / f"matching-{_key(geometry, n_points, backend, seed, landmarks)}.npz"
+    if cache and path.exists():
+        try:
+            with np.load(path) as z:
+                return SampledSurface(geometry, z["samples"], z["rows"], float(z["unit"]), backend)
+        except Exception:
+            path.unlink(missing_ok=True)
+    rec = _RecordingSolver(solver if solver is not None else DistanceSolver(geometry, backend))
+    fps = farthest_point_sampling(rec, n_points, landmarks=landmarks, seed=seed)
+    rows = np.stack([rec.kept[int(s)] for s in fps.samples])
+    surf = SampledSurface(geometry, fps.samples, rows, surface_unit(geometry, float(rows.max())),
+                          backend)
+    if cache:
+        _save(path, surf)
+    return surf
+
+
+def _save(path: Path, surf: SampledSurface) -> None:
+    from shapecond.shapes.io import atomic_write
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_write(path) as tmp:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, samples=surf.samples, rows=surf.rows, unit=surf.unit)
+    except OSError:
+        pass  # an unwritable cache only costs time
+
+
+def insert_landmarks(surface: SampledSurface, landmarks, solver: DistanceSolver | None = None):
+    """Make the landmark vertices samples, placed first; N stays the same.
+
+    Each landmark that is not yet a sample replaces the non-landmark sample
+    nearest to it (one geodesic solve per such landmark), so the sampling stays
+    nearly uniform and both shapes keep N samples (FAQ needs equal sizes).
+
+    Returns
+    -------
+    (SampledSurface, landmark sample indices ``arange(L)``)
+    """
+    lm = np.asarray(landmarks, dtype=np.int64).reshape(-1)
+    n = surface.geometry.n_vertices
+    if lm.size and (lm.min() < 0 or lm.max() >= n):
+        raise InputError(f"landmark vertex out of range 0..{n - 1} on {surface.geometry.name}")
+    if np.unique(lm).size != lm.size:
+        raise InputError(f"repeated landmarks on {surface.geometry.name}")
+    if lm.size > surface.n_samples:
+        raise InputError(f"{lm.size} landmarks but only {surface.n_samples} samples")
+    samples = surface.samples.copy()
+    rows = surface.rows
+    pos = {int(v): i for i, v in enumerate(samples)}
+    missing = [v for v in lm.tolist() if v not in pos]
+    if missing:
+        rows = rows.copy()
+        solver = solver if solver is not None else DistanceSolver(surface.geometry, surface.backend)
+        new_rows = solver.distances(missing).astype(np.float32)
+        protected = np.zeros(samples.size, dtype=bool)
+        protected[[pos[v] for v in lm.tolist() if v in pos]] = True
+        for v, row in zip(missing, new_rows):
+            d = np.where(protected, np.inf, row[samples])
+            i = int(np.argmin(d))
+            samples[i], rows[i], protected[i] = v, row, True
+    where = {int(v): i for i, v in enumerate(samples)}
+    first = np.array([where[v] for v in lm.tolist()], dtype=np.int64)
+    order = np.concatenate([first, np.setdiff1d(np.arange(samples.size), first)])
+    out = replace(surface, samples=samples[order], rows=rows[order])
+    return out, np.arange(lm.size, dtype=np.int64)

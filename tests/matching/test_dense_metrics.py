@@ -1,0 +1,113 @@
+"""Dense maps end to end on a bent copy with known correspondence; error metrics."""
+
+import numpy as np
+import pytest
+
+from shapecond.errors import InputError
+from shapecond.matching.metrics import cumulative_curve, errors_from_rows, normalise, summary
+from shapecond.matching.pipeline import match_shapes
+from shapecond.matching.sampled import insert_landmarks, sample_surface
+from shapecond.shapes.geometry import make_geometry
+from shapecond.shapes.synthetic import plane_patch
+
+W, H = 1.0, 0.55  # a rectangle: 3 non-collinear landmarks remove its symmetries
+
+
+def _patch(n, bend_radius=None, seed=None):
+    """A W x H grid; optionally bent onto a cylinder (an isometry) and its vertices shuffled.
+
+    Returns the geometry and the flat (u, v) coordinates of its vertices.
+    """
+    g = plane_patch(n=n, size=1.0)
+    uv = g.vertices[:, :2] * [W, H]
+    if bend_radius is None:
+        V = np.column_stack([uv, np.zeros(len(uv))])
+    else:
+        th = uv[:, 0] / bend_radius
+        V = np.column_stack([bend_radius * np.sin(th), uv[:, 1], bend_radius * (1 - np.cos(th))])
+    faces = g.faces
+    if seed is not None:
+        perm = np.random.default_rng(seed).permutation(len(V))  # new vertex j = old perm[j]
+        V, uv, faces = V[perm], uv[perm], np.argsort(perm)[faces]
+    return make_geometry(V, faces, name="patch"), uv
+
+
+def _nearest(uv_from, uv_to, idx):
+    return np.array([int(np.argmin(np.linalg.norm(uv_to - uv_from[i], axis=1))) for i in idx])
+
+
+@pytest.fixture(scope="module")
+def pair():
+    src, uv_s = _patch(31)
+    tgt, uv_t = _patch(41, bend_radius=0.35, seed=3)  # another resolution, bent, shuffled
+    ls = np.array([0, 30, 31 * 20 + 12])               # two corners and an inner point
+    lt = _nearest(uv_s, uv_t, ls)
+    return src, uv_s, tgt, uv_t, ls, lt
+
+
+@pytest.mark.parametrize("matcher", ["lh05", "faq"])
+@pytest.mark.parametrize("dense", ["distances", "nearest"])
+def test_bent_copy_is_matched_end_to_end(pair, matcher, dense):
+    src, uv_s, tgt, uv_t, ls, lt = pair
+    m = match_shapes(src, tgt, ls, lt, matcher=matcher, n_points=120, dense=dense)
+    assert m.vertex_map.shape == (src.n_vertices,)
+    assert list(m.vertex_map[ls]) == list(lt)
+    err = np.linalg.norm(uv_t[m.vertex_map] - uv_s, axis=1)   # geodesic = flat distance
+    spacing = np.sqrt(W * H / 120)
+    assert err.mean() < 1.0 * spacing, (matcher, dense, err.mean() / spacing)
+    # the mirror map u -> W - u (the ambiguity landmarks remove) is far from it
+    flipped = np.linalg.norm(uv_t[m.vertex_map] - (uv_s * [-1, 1] + [W, 0]), axis=1)
+    assert flipped.mean() > 3 * err.mean()
+
+
+def test_distance_extension_beats_nearest_sample(pair):
+    src, uv_s, tgt, uv_t, ls, lt = pair
+    errs = {}
+    for dense in ("nearest", "distances"):
+        m = match_shapes(src, tgt, ls, lt, matcher="faq", n_points=120, dense=dense)
+        errs[dense] = np.linalg.norm(uv_t[m.vertex_map] - uv_s, axis=1).mean()
+    assert errs["distances"] < errs["nearest"]
+
+
+def test_bad_pairs_are_input_errors(pair):
+    src, _, tgt, _, ls, lt = pair
+    with pytest.raises(InputError, match="counts differ"):
+        match_shapes(src, tgt, ls, lt[:2], n_points=50)
+    with pytest.raises(InputError, match="out of range"):
+        match_shapes(src, tgt, ls, [0, 1, 10**6], n_points=50)
+    with pytest.raises(InputError, match="unknown matcher"):
+        match_shapes(src, tgt, ls, lt, matcher="nope", n_points=50)
+
+
+def test_insert_landmarks_keeps_n_and_puts_landmarks_first(pair):
+    src = pair[0]
+    surf = sample_surface(src, 40, cache=False)
+    lm = [5, int(surf.samples[7]), 600]
+    out, idx = insert_landmarks(surf, lm)
+    assert out.n_samples == 40 and list(out.samples[:3]) == lm and list(idx) == [0, 1, 2]
+    assert np.unique(out.samples).size == 40
+    # rows follow their samples: distance of each sample to itself is 0
+    assert np.allclose(out.rows[np.arange(40), out.samples], 0.0)
+
+
+def test_errors_from_rows_and_normalisations():
+    rows = np.array([[0.0, 2.0, 4.0], [1.0, 0.0, 3.0]])
+    e = errors_from_rows(rows, [2, 0])
+    assert list(e) == [4.0, 1.0]
+    assert list(normalise(e, diameter=8.0)) == [100.0, 25.0]
+    assert np.allclose(normalise(e, 8.0, area=4.0, normalisation="sqrt_area"), [2.0, 0.5])
+    with pytest.raises(InputError):
+        normalise(e, 8.0, normalisation="sqrt_area")
+    with pytest.raises(InputError):
+        errors_from_rows(rows, [0, 5])
+
+
+def test_cumulative_curve_against_brute_force():
+    rng = np.random.default_rng(0)
+    e = rng.exponential(size=57)
+    th = np.linspace(0, 4, 23)
+    want = [np.mean(e <= x) for x in th]
+    assert np.allclose(cumulative_curve(e, th), want)
+    assert summary(e)["mean"] == pytest.approx(e.mean())
+    with pytest.raises(InputError):
+        summary([])

@@ -1,0 +1,145 @@
+"""Sample matchers (LH05 spectral, FAQ seeded) against known correspondences."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from scipy.spatial.distance import cdist
+
+from shapecond.errors import InputError
+from shapecond.matching.candidates import (check_landmarks, descriptor_cost, k_best_candidates,
+                                           recall)
+from shapecond.matching.seeded import faq_match
+from shapecond.matching.spectral import (affinity_matrix, assignment_rounding, complete_map,
+                                         greedy_discretisation, lh05_match, principal_eigenvector)
+
+
+def _planar(n, seed):
+    """Distances of n random points in an asymmetric planar domain (an isometry class)."""
+    rng = np.random.default_rng(seed)
+    p = rng.uniform(size=(n, 2)) * [2.0, 1.0]
+    p[:, 1] *= 1.0 - 0.35 * p[:, 0]
+    return p, cdist(p, p)
+
+
+def _permuted(D, seed):
+    """Target = the same metric with points permuted; truth[x] = target index of x."""
+    perm = np.random.default_rng(seed).permutation(D.shape[0])  # target j is source perm[j]
+    truth = np.argsort(perm)
+    return D[np.ix_(perm, perm)], truth
+
+
+def test_bad_landmarks_are_input_errors():
+    with pytest.raises(InputError, match="counts differ"):
+        check_landmarks(10, 10, [1, 2], [1])
+    with pytest.raises(InputError, match="out of range"):
+        check_landmarks(10, 10, [1, 12], [1, 2])
+    with pytest.raises(InputError, match="repeated"):
+        check_landmarks(10, 10, [1, 1], [1, 2])
+    _, D = _planar(20, 0)
+    with pytest.raises(InputError, match="counts differ"):
+        lh05_match(D, D, [0, 1, 2], [0, 1])
+    with pytest.raises(InputError, match="same number of samples"):
+        faq_match(D, D[:15, :15], [0], [0])
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 10_000), st.integers(1, 6))
+def test_k_best_candidates_equal_brute_force(seed, k):
+    _, Ds = _planar(12, seed)
+    Dt, truth = _permuted(Ds, seed + 1)
+    ls, lt = [0, 3], truth[[0, 3]]
+    cand = k_best_candidates(Ds, Dt, ls, lt, k=k)
+    cost = descriptor_cost(Ds, Dt, ls, lt)
+    for x in range(12):
+        got = sorted(cand.target[cand.source == x])
+        if x in ls:
+            assert got == [lt[ls.index(x)]]
+            continue
+        free = [y for y in range(12) if y not in set(lt)]
+        want = sorted(sorted(free, key=lambda y: (cost[x, y], y))[:k])
+        # ties aside, the k smallest costs are the same set
+        assert np.allclose(sorted(cost[x, got]), sorted(cost[x, want]))
+    # a true isometric copy: descriptors coincide, recall is perfect
+    assert recall(cand, truth) == 1.0
+
+
+def test_affinity_matrix_matches_definition():
+    _, Ds = _planar(7, 3)
+    Dt, truth = _permuted(Ds, 4)
+    cand = k_best_candidates(Ds, Dt, [0], [truth[0]], k=3)
+    s = 0.2
+    M = affinity_matrix(Ds, Dt, cand, s)
+    for a in range(cand.size):
+        for b in range(cand.size):
+            x, y, x2, y2 = cand.source[a], cand.target[a], cand.source[b], cand.target[b]
+            want = 0.0 if (x == x2 or y == y2) else np.exp(-(Ds[x, x2] - Dt[y, y2]) ** 2 / (2 * s * s))
+            assert M[a, b] == pytest.approx(want, rel=1e-5, abs=1e-7)
+
+
+def test_power_iteration_finds_perron_vector():
+    rng = np.random.default_rng(0)
+    A = rng.uniform(size=(30, 30)).astype(np.float32)
+    A = A + A.T
+    v, _, ok = principal_eigenvector(A, tol=1e-7, max_iter=1000)
+    w, V = np.linalg.eigh(A.astype(np.float64))
+    assert ok
+    assert np.allclose(v, np.abs(V[:, -1]), atol=1e-4)
+
+
+def test_roundings_are_injective_and_keep_landmarks():
+    _, Ds = _planar(40, 5)
+    Dt, truth = _permuted(Ds, 6)
+    ls, lt = [2, 9], truth[[2, 9]]
+    cand = k_best_candidates(Ds, Dt, ls, lt, k=4)
+    v = np.random.default_rng(1).uniform(size=cand.size)
+    for t in (greedy_discretisation(cand, v, 40), assignment_rounding(cand, v, 40, 40)):
+        t = complete_map(Ds, Dt, t)
+        assert sorted(t) == list(range(40))
+        assert list(t[ls]) == list(lt)
+
+
+@pytest.mark.parametrize("rounding", ["greedy", "assignment"])
+def test_lh05_recovers_an_isometric_permutation(rounding):
+    _, Ds = _planar(120, 7)
+    Dt, truth = _permuted(Ds, 8)
+    ls = [0, 1, 2]
+    m = lh05_match(Ds, Dt, ls, truth[ls], k=10, rounding=rounding)
+    assert np.mean(m.t == truth) >= 0.98
+    assert list(m.t[ls]) == list(truth[ls])
+
+
+@pytest.mark.parametrize("objective", ["distance", "gaussian"])
+def test_faq_recovers_an_isometric_permutation(objective):
+    _, Ds = _planar(120, 9)
+    Dt, truth = _permuted(Ds, 10)
+    ls = [0, 1, 2]
+    m = faq_match(Ds, Dt, ls, truth[ls], objective=objective)
+    assert np.mean(m.t == truth) >= 0.98
+    assert list(m.t[ls]) == list(truth[ls])
+
+
+def _fps(p, n, start):
+    idx = [start]
+    d = np.linalg.norm(p - p[start], axis=1)
+    for _ in range(n - 1):
+        idx.append(int(np.argmax(d)))
+        d = np.minimum(d, np.linalg.norm(p - p[idx[-1]], axis=1))
+    return np.array(idx)
+
+
+def test_matchers_on_two_different_samplings():
+    """Source and target sample the same domain independently: errors ~ one spacing."""
+    rng = np.random.default_rng(11)
+    p = rng.uniform(size=(5000, 2)) * [2.0, 1.0]
+    p = p[p[:, 1] < 1.0 - 0.35 * p[:, 0]]
+    a, b = p[_fps(p, 150, 0)], p[_fps(p, 150, 1)].copy()
+    ls = np.array([0, 1, 2])
+    truth = cdist(a, b).argmin(1)
+    lt = np.array([10, 20, 30])
+    b[lt] = a[ls]
+    Ds, Dt = cdist(a, a), cdist(b, b)
+    spacing = np.median(np.sort(Ds, 1)[:, 1])
+    for m in (lh05_match(Ds, Dt, ls, lt, k=20), faq_match(Ds, Dt, ls, lt)):
+        err = np.linalg.norm(a - b[m.t], axis=1)
+        assert err.mean() < 2.5 * spacing, m.matcher
+        assert np.median(err) < 1.5 * spacing, m.matcher
