@@ -1,0 +1,88 @@
+"""``shapecond match``: map file, JSON summary, and one-line errors for bad input."""
+
+import json
+
+import numpy as np
+import pytest
+
+from shapecond.cli import main
+from shapecond.shapes.synthetic import plane_patch
+
+
+def run(capsys, *argv):
+    with pytest.raises(SystemExit) as exit_info:
+        main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return exit_info.value.code, out, err
+
+
+def _write_off(path, V, F):
+    path.write_text(f"OFF\n{len(V)} {len(F)} 0\n" + "\n".join(" ".join(map(str, v)) for v in V) + "\n"
+                    + "\n".join(f"3 {a} {b} {c}" for a, b, c in F) + "\n")
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A 0.55 x 1 grid and the same grid bent, rotated and with shuffled vertex ids."""
+    d = tmp_path_factory.mktemp("match")
+    g = plane_patch(n=21)
+    V = g.vertices * [1.0, 0.55, 0.0]
+    perm = np.random.default_rng(0).permutation(len(V))       # target vertex j = source perm[j]
+    inv = np.argsort(perm)
+    th = V[:, 0] / 0.4
+    Vb = np.column_stack([0.4 * np.sin(th), V[:, 1], 0.4 * (1 - np.cos(th))])
+    c, s = np.cos(0.7), np.sin(0.7)
+    Vb = Vb @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) + [3.0, -1.0, 2.0]
+    _write_off(d / "src.off", V, g.faces)
+    _write_off(d / "tgt.off", Vb[perm], inv[g.faces])
+    return d, V, inv
+
+
+@pytest.mark.parametrize("matcher", ["lh05", "faq"])
+def test_match_writes_one_target_id_per_source_vertex(files, capsys, matcher):
+    d, V, inv = files
+    ls = [0, 20, 21 * 14 + 6]
+    code, out, err = run(capsys, "match", d / "src.off", d / "tgt.off",
+                         "--landmarks-source", ",".join(map(str, ls)),
+                         "--landmarks-target", ",".join(str(inv[v]) for v in ls),
+                         "--matcher", matcher, "--points", 80, "-o", d / f"{matcher}.txt", "--json")
+    assert code == 0, err
+    summary = json.loads(out)
+    assert summary["matcher"] == matcher and summary["direction"] == "source to target"
+    m = np.loadtxt(d / f"{matcher}.txt", dtype=np.int64)
+    assert m.shape == (len(V),)
+    assert all(m[v] == inv[v] for v in ls)
+    # error in the flat parameter domain (the bend is an isometry)
+    truth_xy = V[:, :2]
+    pred_xy = V[np.argsort(inv)[m], :2]
+    err_mean = np.linalg.norm(pred_xy - truth_xy, axis=1).mean()
+    assert err_mean < np.sqrt(0.55 / 80), err_mean
+
+
+def test_matching_two_distance_matrices(tmp_path, capsys):
+    rng = np.random.default_rng(1)
+    p = rng.uniform(size=(40, 2))
+    D = np.linalg.norm(p[:, None] - p[None], axis=2)
+    perm = rng.permutation(40)
+    np.save(tmp_path / "a.npy", D)
+    np.save(tmp_path / "b.npy", D[np.ix_(perm, perm)])
+    inv = np.argsort(perm)
+    code, _, err = run(capsys, "match", tmp_path / "a.npy", tmp_path / "b.npy",
+                       "--landmarks-source", "0,1,2", "--landmarks-target",
+                       ",".join(str(inv[v]) for v in (0, 1, 2)), "--matcher", "faq", "-o", tmp_path / "m.txt")
+    assert code == 0, err
+    assert np.mean(np.loadtxt(tmp_path / "m.txt", dtype=int) == inv) > 0.95
+
+
+@pytest.mark.parametrize("ls, lt, needle", [
+    ("0,1,2", "0,1", "landmark counts differ"),
+    ("0,1,99999", "0,1,2", "99999"),
+    ("0,1,2", "0,1,x", "is not a vertex id"),
+])
+def test_bad_landmarks_give_one_line_errors(files, capsys, ls, lt, needle):
+    d, _, _ = files
+    code, out, err = run(capsys, "match", d / "src.off", d / "tgt.off", "--landmarks-source", ls,
+                         "--landmarks-target", lt, "--points", 30, "-o", d / "bad.txt")
+    assert code == 2 and out == ""
+    assert err.startswith("error:") and needle in err and err.count("\n") == 1
+    assert not (d / "bad.txt").exists()
