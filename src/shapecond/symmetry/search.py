@@ -1,0 +1,322 @@
+"""Lower bound of the global symmetry score with a witness map (DESIGN.md section 3).
+
+σ(X) = sup_{T ≠ Id} sqrt(d²(T) / Dist²(T)) (paper Eq. 5, L² case), the sup over
+maps fixing every landmark.  Any map T ≠ Id gives σ(X) ≥ σ_T, so the best map
+found by a search is a certified lower bound and the map itself is the
+*witness*: the near-isometry that makes the shape hard to match.
+
+The search is a multistart local search on the ratio itself (not only on a
+fixed-s objective): moves swap the images of two samples or, with dense
+targets (M > N), send one sample to a free target among the k nearest of its
+current image; every move is evaluated in O(1) from the maintained products
+G and H of ``objective`` and applied by a rank-1 update
+(``shapecond.symmetry._kernels``, numba).  Starts, in order: the best single
+swap (exact, :func:`best_single_swap`), warm starts, spectral sign-flip maps,
+Gilmore-Lawler assignment maps over a grid of s, a fixed-s ladder on
+d² − s·Dist², random starts, then iterated local search (random kicks of the
+best maps).  With dense targets all of this runs on the bijections of X first
+(G is N × N, cheap) and the best few maps are then refined over Y.
+
+Perfect symmetry: a map whose exact Dist² is round-off
+(``objective.is_isometry``) gives σ = ``math.inf`` and stops the search.  The
+identity (d² = 0) is never a witness.  Given a seed the result is
+deterministic unless ``time_limit`` cuts the search short.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from shapecond.errors import InputError
+from shapecond.symmetry import _kernels as K
+from shapecond.symmetry import objective as obj
+from shapecond.symmetry import starts as S
+
+#: Work per effort level: spectral vectors / sign pairs / starts polished,
+#: Gilmore-Lawler grid size / starts polished, ladder runs, random starts,
+#: ILS kicks, maps refined over dense targets, dense kicks.  ``small``: on
+#: small instances, where a local search costs microseconds, the random starts
+#: and the kicks are each raised to ``small / n_free²``.
+EFFORTS = {
+    "quick": dict(vectors=6, pairs=3, spectral=4, gl=6, gl_polish=3, ladder=1,
+                  random=2, kicks=10, dense=2, dense_kicks=2, small=5e3),
+    "default": dict(vectors=10, pairs=5, spectral=8, gl=10, gl_polish=5, ladder=2,
+                    random=6, kicks=40, dense=3, dense_kicks=6, small=1e4),
+    "thorough": dict(vectors=16, pairs=8, spectral=24, gl=16, gl_polish=10, ladder=4,
+                     random=24, kicks=200, dense=6, dense_kicks=30, small=2e5),
+}
+
+#: Reassignment moves consider the ``DENSE_K`` nearest targets of the current image.
+DENSE_K = 16
+#: How many distinct local optima a result keeps (warm starts for CNBS).
+KEEP = 5
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """Best map found by :func:`witness_search` (a lower bound of σ, Eq. 5).
+
+    ``sigma`` is ``math.inf`` when ``witness`` is a non-identity isometry.
+    ``maps``/``sigmas``: up to ``KEEP`` distinct local optima, best first.
+    """
+
+    sigma: float
+    witness: np.ndarray
+    d2: float
+    dist2: float
+    maps: tuple
+    sigmas: tuple
+    seconds: float
+
+    def to_dict(self) -> dict:
+        return {"sigma": self.sigma, "witness": self.witness.tolist(), "d2": self.d2,
+                "dist2": self.dist2, "sigmas": list(self.sigmas), "seconds": self.seconds}
+
+
+def _prepare(D, n_samples, landmarks):
+    """Validate the inputs; return (D float64 C-order, n, sorted landmarks, free samples)."""
+    D = np.ascontiguousarray(np.asarray(D, dtype=np.float64))
+    if D.ndim != 2 or D.shape[0] != D.shape[1]:
+        raise InputError(f"the distance matrix must be square, got shape {D.shape}")
+    if not np.all(np.isfinite(D)):
+        raise InputError("the distance matrix contains NaN or infinite entries")
+    m = D.shape[0]
+    n = m if n_samples is None else int(n_samples)
+    if n < 2 or n > m:
+        raise InputError(f"the number of samples must be in [2, {m}], got {n}")
+    lm = np.asarray(list(landmarks), dtype=np.int64).ravel()
+    if lm.size and (lm.min() < 0 or lm.max() >= n):
+        raise InputError(f"landmark index out of range [0, {n})")
+    if np.unique(lm).size != lm.size:
+        raise InputError("landmarks must not repeat")
+    lm = np.sort(lm)
+    free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
+    if free.size < 2 and not (free.size == 1 and m > n):
+        raise InputError("at least two samples must be free of landmarks: "
+                         "otherwise every admissible map is the identity")
+    return D, n, lm, free
+
+
+def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
+    """Exact best map that exchanges two free samples: (σ, a, b).
+
+    For the swap (a b), d² = 2 D[a,b]² and Dist² = 4 Σ_{x ≠ a,b} (D[x,a] − D[x,b])²,
+    all pairs at once from K = D_XX² (one O(N³) product, then O(N²)).  Every
+    metric space has σ ≥ 1/sqrt(2(N − 2)) from these maps (DESIGN.md 1,
+    "Floor"); a swap that is an isometry gives ``inf``.
+    """
+    D, n, lm, free = _prepare(D, n_samples, landmarks)
+    if free.size < 2:
+        return 0.0, -1, -1
+    X = D[:n, :n]
+    Kx = X @ X
+    dg = np.diag(Kx)
+    Xf = X[np.ix_(free, free)]
+    Q = dg[free][:, None] + dg[free][None, :] - 2.0 * Kx[np.ix_(free, free)] - 2.0 * Xf**2
+    num = 2.0 * Xf**2
+    den = 4.0 * np.maximum(Q, 0.0)
+    iso = (den <= (obj.ISOMETRY_RTOL**2) * float(np.sum(X**2))) & (num > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.where(num > 0, num / np.where(den > 0, den, 1.0), -1.0)
+    r[iso] = np.inf
+    np.fill_diagonal(r, -1.0)
+    i, j = np.unravel_index(int(np.argmax(r)), r.shape)
+    best = r[i, j]
+    return (math.inf if best == np.inf else math.sqrt(max(best, 0.0))), int(free[i]), int(free[j])
+
+
+class _Stage:
+    """One search space: maps of the n samples into the M points of ``D``."""
+
+    def __init__(self, D, n, free, dense_k):
+        self.D, self.n, self.free = D, n, free
+        m = D.shape[0]
+        k = min(dense_k, m - 1) if m > n else 0
+        if k:
+            self.knn = np.ascontiguousarray(np.argpartition(D, k, axis=1)[:, : k + 1])
+            # drop each target itself from its own list (distance 0)
+            rows = [r[r != i][:k] for i, r in enumerate(self.knn)]
+            self.knn = np.ascontiguousarray(np.array(rows, dtype=np.int64))
+        else:
+            self.knn = np.zeros((m, 0), dtype=np.int64)
+        self.floor = (obj.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2))
+
+    def polish(self, t, mode=K.MODE_RATIO, s=0.0, max_moves=None):
+        """Local search from map t; returns the new map (t is not modified)."""
+        D, n = self.D, self.n
+        t = np.array(t, dtype=np.int64)
+        G = D[:n, :n] @ D[t, :]
+        H = np.sum(D[t, :] ** 2, axis=0)
+        used = np.zeros(D.shape[0], dtype=bool)
+        used[t] = True
+        cap = 50 * n if max_moves is None else max_moves
+        K.local_search(D, n, t, G, H, self.free, self.knn, used, mode, float(s),
+                       obj.d2(D, t), obj.dist2(D, t), self.floor, cap)
+        return t
+
+
+class _Pool:
+    """Distinct maps with their exact scores (σ² or inf), best first."""
+
+    def __init__(self, D, n):
+        self.D, self.n, self.items = D, n, {}
+
+    def value(self, t) -> tuple[float, float, float]:
+        num = obj.d2(self.D, t)
+        den = obj.dist2(self.D, t)
+        if num == 0.0:
+            return 0.0, num, den
+        if obj.is_isometry(self.D, den, self.n):
+            return math.inf, num, den
+        return num / den, num, den
+
+    def add(self, t) -> float:
+        key = np.asarray(t, dtype=np.int64).tobytes()
+        if key not in self.items:
+            v, num, den = self.value(t)
+            self.items[key] = (v, np.array(t, dtype=np.int64), num, den)
+        return self.items[key][0]
+
+    def top(self, k):
+        return sorted(self.items.values(), key=lambda it: -it[0])[:k]
+
+    def best_value(self) -> float:
+        return max((it[0] for it in self.items.values()), default=0.0)
+
+
+def _kick(rng, t, free, size):
+    """Rotate the images of ``size`` random free samples (an ILS perturbation)."""
+    t = t.copy()
+    idx = rng.choice(free, size=min(size, free.size), replace=False)
+    t[idx] = t[np.roll(idx, 1)]
+    return t
+
+
+def _dense_kick(rng, t, free, knn, m, size):
+    """Kick over dense targets: a rotation plus moves to random free nearby targets."""
+    t = _kick(rng, t, free, size)
+    used = np.zeros(m, dtype=bool)
+    used[t] = True
+    for a in rng.choice(free, size=min(size, free.size), replace=False):
+        cand = [y for y in knn[t[a]] if not used[y]]
+        if cand:
+            y = cand[int(rng.integers(len(cand)))]
+            used[t[a]], used[y] = False, True
+            t[a] = y
+    return t
+
+
+def witness_search(D, n_samples=None, landmarks=(), seed=0, starts=(), effort="default",
+                   time_limit=None) -> SearchResult:
+    """Lower bound of σ (Eq. 5) with the map attaining it; see the module docstring.
+
+    Parameters
+    ----------
+    D : (M, M) distance matrix; the samples X are the first ``n_samples`` points
+        (default M: bijections of X, the paper's score; M > N: dense targets).
+    landmarks : sample indices with T(l) = l.
+    seed : seed of ``np.random.default_rng``; the result is deterministic.
+    starts : extra initial maps (warm starts), repaired to fix landmarks and be
+        injective.
+    effort : "quick", "default" or "thorough" (see ``EFFORTS``).
+    time_limit : seconds; the search stops between local searches when reached.
+    """
+    t_start = time.perf_counter()
+    if effort not in EFFORTS:
+        raise InputError(f"effort must be one of {sorted(EFFORTS)}, got {effort!r}")
+    cfg = EFFORTS[effort]
+    D, n, lm, free = _prepare(D, n_samples, landmarks)
+    m = D.shape[0]
+    rng = np.random.default_rng(seed)
+    deadline = math.inf if time_limit is None else t_start + float(time_limit)
+    pool = _Pool(D, n)
+
+    def late():
+        return time.perf_counter() > deadline or pool.best_value() == math.inf
+
+    bij = _Stage(np.ascontiguousarray(D[:n, :n]), n, free, 0)
+    dense = _Stage(D, n, free, DENSE_K) if m > n else None
+    warm = [S.repair(t, n, m, lm) for t in starts]
+    warm_bij = [t for t in warm if t.max() < n]
+
+    def run(stage, t, **kw):
+        if not late():
+            pool.add(stage.polish(t, **kw))
+
+    # 1. best single swap (exact) and warm starts
+    s_swap = 0.0
+    if free.size >= 2:
+        s_swap, a, b = best_single_swap(D, n, lm)
+        pool.add(S.swap_map(n, a, b))
+        run(bij, S.swap_map(n, a, b))
+    for t in warm_bij:
+        run(bij, t)
+    if free.size >= 3:
+        # 2. spectral sign-flip starts, the most promising ones polished
+        cand = S.spectral_starts(bij.D, free, cfg["vectors"], cfg["pairs"])
+        cand.sort(key=lambda t: -pool.value(t)[0])
+        for t in cand[: cfg["spectral"]]:
+            run(bij, t)
+        # 3. Gilmore-Lawler assignment starts over a grid of s
+        s_ref = 1.0 / max(s_swap, 1e-6) ** 2 if math.isfinite(s_swap) else 1.0
+        grid = [s_ref * 4.0 ** (1 - j) for j in range(cfg["gl"])]
+        cand = S.gilmore_lawler_starts(bij.D, free, lm, grid)
+        gl_best = sorted(cand, key=lambda t: -pool.value(t)[0])
+        for t in gl_best[: cfg["gl_polish"]]:
+            run(bij, t)
+        # 4. fixed-s ladder: maximise d² − s·Dist² for increasing s, polish each rung
+        for r in range(cfg["ladder"]):
+            t = gl_best[r] if r < len(gl_best) else S.random_start(rng, n, free)
+            for j in range(6, -1, -1):
+                if late():
+                    break
+                t = bij.polish(t, mode=K.MODE_FIXED_S, s=s_ref * 4.0**-j)
+                if np.any(t != np.arange(n)):
+                    run(bij, t)
+        # 5. random starts
+        extra = int(cfg["small"] / free.size**2)
+        for _ in range(max(cfg["random"], extra)):
+            run(bij, S.random_start(rng, n, free))
+        # 6. iterated local search: kick one of the best maps, polish
+        hi = max(3, free.size // 8)
+        for i in range(max(cfg["kicks"], extra)):
+            if late():
+                break
+            tops = pool.top(3)
+            base = tops[0][1] if i % 3 else tops[i // 3 % len(tops)][1]
+            run(bij, _kick(rng, base, free, int(rng.integers(2, hi + 1))))
+    # 7. dense targets: refine the best bijections (and dense warm starts) over Y
+    if dense is not None:
+        refine = [it[1] for it in pool.top(cfg["dense"])]
+        refine += [t for t in warm if t.max() >= n]
+        ys = np.arange(n, m)
+        if free.size >= 1 and ys.size:  # best single reassignment x -> y outside X
+            X, Y = D[:n, free], D[:n, ys]
+            # Σ_x (D[x,a] − D[x,y])² for all (a, y) by one product
+            sq = np.sum(X**2, axis=0)[:, None] + np.sum(Y**2, axis=0)[None, :] - 2.0 * X.T @ Y
+            num = D[np.ix_(free, ys)] ** 2
+            den = 2.0 * np.maximum(sq - num, 1e-300)  # the x = a term is D[a,y]²
+            i, j = np.unravel_index(int(np.argmax(num / den)), num.shape)
+            t = np.arange(n, dtype=np.int64)
+            t[free[i]] = ys[j]
+            refine.append(t)
+        for t in refine:
+            run(dense, t)
+        for i in range(cfg["dense_kicks"]):
+            if late():
+                break
+            base = pool.top(2)[i % 2 if len(pool.items) > 1 else 0][1]
+            run(dense, _dense_kick(rng, base, free, dense.knn, m,
+                                   int(rng.integers(2, max(3, free.size // 10) + 1))))
+    tops = [it for it in pool.top(KEEP) if it[0] > 0.0]
+    if not tops:  # cannot happen with >= 2 free samples; kept as a guard
+        raise InputError("no non-identity map satisfies the landmarks")
+    v, t, num, den = tops[0]
+    sig = [math.inf if it[0] == math.inf else math.sqrt(it[0]) for it in tops]
+    return SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den,
+                        maps=tuple(it[1] for it in tops), sigmas=tuple(sig),
+                        seconds=time.perf_counter() - t_start)

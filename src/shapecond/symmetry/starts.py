@@ -1,0 +1,166 @@
+"""Start maps of the witness search (DESIGN.md section 3, "Starts that matter").
+
+All starts are bijections of the samples X (the first ``n`` points), built
+from ``DX = D[:n, :n]``; landmarks are fixed points.  The search refines them
+(and, with dense targets, moves them onto the denser set Y afterwards).
+
+* ``swap_map``: the identity with two samples exchanged (best single swap).
+* ``spectral_starts``: sign-flip maps.  A symmetry T of a metric space
+  commutes with D, so it maps each embedding coordinate of a (simple)
+  eigenvector to ± itself; flipping the signs of a few coordinates and solving
+  a linear assignment gives candidate maps.  Two embeddings: classical MDS of
+  D² and diffusion coordinates of a Gaussian kernel of D.  Spectral starts
+  alone are not enough (on an animal the antisymmetric vector was 6th by |λ|),
+  hence the other families.
+* ``gilmore_lawler_starts``: argmax ⟨W − s·GL, P⟩ over bijections P, with
+  ``W[x, y] = D[x, y]²`` (displacement) and ``GL[x, y]`` the Gilmore-Lawler
+  lower bound of the distortion of row x sent to y (sorted rows matched; exact
+  on landmark columns).  Since Dist²(T) ≥ Σ_x GL[x, Tx], small s favours large
+  displacement, large s near-isometries; a grid of s gives a family of starts.
+* ``random_start``: a random permutation of the free samples.
+* ``repair``: makes any user map a valid start (landmarks fixed, injective).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+
+def swap_map(n: int, a: int, b: int) -> np.ndarray:
+    """The identity on ``range(n)`` with ``a`` and ``b`` exchanged."""
+    t = np.arange(n, dtype=np.int64)
+    t[a], t[b] = b, a
+    return t
+
+
+def random_start(rng: np.random.Generator, n: int, free: np.ndarray) -> np.ndarray:
+    """A uniformly random bijection of X fixing every non-free sample."""
+    t = np.arange(n, dtype=np.int64)
+    t[free] = rng.permutation(free)
+    return t
+
+
+def repair(t, n: int, m: int, landmarks: np.ndarray) -> np.ndarray:
+    """Turn an arbitrary int array into a valid map: length n, values in
+    ``range(m)``, injective, ``t[l] = l`` for every landmark.
+
+    Entries out of range, duplicated or sitting on a landmark's target are
+    replaced by unused targets, samples first (lowest index first), so a
+    bijection of X stays a bijection of X.
+    """
+    t = np.asarray(t, dtype=np.int64).ravel()
+    if t.size != n:
+        raise ValueError(f"a start map must have length {n}, got {t.size}")
+    t = t.copy()
+    lm = set(int(x) for x in landmarks)
+    t[list(lm)] = list(lm)
+    taken = set(lm)
+    bad = []
+    for x in range(n):
+        if x in lm:
+            continue
+        y = int(t[x])
+        if y < 0 or y >= m or y in taken:
+            bad.append(x)
+        else:
+            taken.add(y)
+    spare = (y for y in range(m) if y not in taken)
+    for x in bad:
+        t[x] = next(spare)
+    return t
+
+
+def _assign(score: np.ndarray, free: np.ndarray, n: int) -> np.ndarray:
+    """Bijection of X maximising Σ score[x, T x] over the free samples."""
+    t = np.arange(n, dtype=np.int64)
+    rows, cols = linear_sum_assignment(score[np.ix_(free, free)], maximize=True)
+    t[free[rows]] = free[cols]
+    return t
+
+
+def _mds(DX: np.ndarray, k: int) -> np.ndarray:
+    """Classical MDS coordinates (n, k) of DX, scaled by sqrt(eigenvalue)."""
+    n = DX.shape[0]
+    J = np.eye(n) - 1.0 / n
+    B = -0.5 * J @ (DX**2) @ J
+    lam, V = np.linalg.eigh(B)
+    order = np.argsort(lam)[::-1][:k]
+    lam = np.clip(lam[order], 0.0, None)
+    return V[:, order] * np.sqrt(lam)
+
+
+def _diffusion(DX: np.ndarray, k: int) -> np.ndarray:
+    """Diffusion coordinates (n, k) of a Gaussian kernel of DX (constant dropped)."""
+    n = DX.shape[0]
+    nn = np.sort(DX, axis=1)[:, 1 : min(n, 8)]
+    eps = 2.0 * float(np.median(nn)) if nn.size else 1.0
+    K = np.exp(-((DX / max(eps, 1e-12)) ** 2))
+    deg = K.sum(axis=1)
+    A = K / np.sqrt(np.outer(deg, deg))
+    lam, V = np.linalg.eigh(A)
+    order = np.argsort(lam)[::-1][1 : k + 1]
+    phi = V[:, order] / np.sqrt(deg)[:, None]
+    phi /= np.maximum(np.linalg.norm(phi, axis=0), 1e-300)
+    return phi * np.clip(lam[order], 0.0, None)
+
+
+def spectral_starts(DX: np.ndarray, free: np.ndarray, n_vectors: int = 10,
+                    n_pairs: int = 5) -> list[np.ndarray]:
+    """Sign-flip starts from two embeddings (MDS and diffusion).
+
+    For each embedding Φ (n × k, k = n_vectors) and each sign pattern S that
+    flips one coordinate, or two among the first ``n_pairs``, the start is the
+    bijection maximising Σ_x ⟨Φ_x S, Φ_{T x}⟩ (linear assignment).  Maps equal
+    to the identity are dropped; duplicates are removed.
+    """
+    n = DX.shape[0]
+    k = max(1, min(n_vectors, n - 2))
+    patterns = [(i,) for i in range(k)]
+    patterns += list(itertools.combinations(range(min(n_pairs, k)), 2))
+    out, seen = [], set()
+    for phi in (_mds(DX, k), _diffusion(DX, k)):
+        for pat in patterns:
+            sgn = np.ones(phi.shape[1])
+            sgn[[p for p in pat if p < phi.shape[1]]] = -1.0
+            t = _assign((phi * sgn) @ phi.T, free, n)
+            key = t.tobytes()
+            if key not in seen and np.any(t != np.arange(n)):
+                seen.add(key)
+                out.append(t)
+    return out
+
+
+def gilmore_lawler(DX: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
+    """GL[x, y]: lower bound of Σ_{x'} (D[x,x'] − D[y, T x'])² over maps with T x = y.
+
+    Landmark columns are fixed by T and enter exactly; the other columns are a
+    bijection among themselves, whose best pairing is the sorted order
+    (rearrangement inequality).  Computed as a Gram matrix: O(n³) BLAS.
+    """
+    n = DX.shape[0]
+    mask = np.ones(n, dtype=bool)
+    mask[landmarks] = False
+    R = np.sort(DX[:, mask], axis=1)
+    L = DX[:, ~mask]
+    F = np.hstack([R, L])
+    sq = np.sum(F**2, axis=1)
+    return np.maximum(sq[:, None] + sq[None, :] - 2.0 * F @ F.T, 0.0)
+
+
+def gilmore_lawler_starts(DX: np.ndarray, free: np.ndarray, landmarks: np.ndarray,
+                          s_values) -> list[np.ndarray]:
+    """Maps argmax_T Σ_x (D[x,Tx]² − s·GL[x,Tx]) for each s (linear assignments)."""
+    n = DX.shape[0]
+    W = DX**2
+    GL = gilmore_lawler(DX, landmarks)
+    out, seen = [], set()
+    for s in s_values:
+        t = _assign(W - s * GL, free, n)
+        key = t.tobytes()
+        if key not in seen and np.any(t != np.arange(n)):
+            seen.add(key)
+            out.append(t)
+    return out
