@@ -1,0 +1,82 @@
+"""``shapecond evaluate DATASET_DIR``: the paper's Figure 7 evaluation on class folders.
+
+Each sub-folder of DATASET_DIR is a class of shapes with the same vertex count
+and order (ground truth = identity on vertex ids).  See
+``shapecond.matching.evaluation`` for the protocol and ``report`` for the output.
+
+Running on a Dask cluster: start a scheduler and workers that can read
+DATASET_DIR (and, ideally, share ``$SHAPECOND_CACHE``), then pass
+``--scheduler tcp://HOST:8786``; joblib's dask backend ships the per-shape tasks
+to the workers (needs ``pip install 'shapecond[dask]'``).
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import click
+
+from ..errors import InputError
+from ..matching.evaluation import evaluate_dataset
+from ..matching.pipeline import MATCHERS
+from ..matching.report import correlation, write_report
+from .common import emit_json, info, json_option, progress_enabled
+
+DEFAULT_METHODS = "fps,pls,hks,cnbs"
+
+
+def _names(text, allowed=None, what="name"):
+    names = [t.strip() for t in str(text).split(",") if t.strip()] if text else []
+    if allowed is not None:
+        bad = [n for n in names if n not in allowed]
+        if bad:
+            raise InputError(f"unknown {what} {bad[0]!r} (choose from {', '.join(allowed)})")
+    if text is not None and not names:
+        raise InputError(f"empty list of {what}s")
+    return names
+
+
+@click.command("evaluate")
+@click.argument("dataset_dir", type=click.Path(file_okay=False))
+@click.option("--classes", default=None, help="Comma-separated class folders [default: all].")
+@click.option("--methods", default=DEFAULT_METHODS, show_default=True,
+              help="Landmark methods (shapecond.landmarks).")
+@click.option("--matchers", default="lh05,faq", show_default=True, help="Matchers: lh05, faq.")
+@click.option("--jobs", "-j", type=int, default=1, show_default=True,
+              help="Parallel processes for the per-shape work (joblib).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="evaluation",
+              show_default=True, help="Folder for report.md, results.json and the PNG plots.")
+@click.option("--quick", is_flag=True,
+              help="A small run: wolf and centaur (or the first two classes), 2 targets each, N = 200.")
+@click.option("--points", "-n", type=int, default=None,
+              help="Samples per shape [default: 400, or 200 with --quick].")
+@click.option("--max-targets", type=int, default=None, help="Match at most this many shapes per class.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
+              show_default=True)
+@click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
+@click.option("--scheduler", default=None,
+              help="Dask scheduler address (tcp://host:8786): run the tasks on that cluster.")
+@json_option
+def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, points, max_targets,
+            seed, geodesic_backend, no_cache, scheduler, as_json):
+    """Landmarks on each null shape, matched to the rest of its class; a Markdown report."""
+    if jobs < 1:
+        raise InputError("--jobs must be at least 1")
+    t0 = time.perf_counter()
+    ev = evaluate_dataset(Path(dataset_dir), classes=_names(classes, what="class") or None,
+                          methods=_names(methods, what="method"),
+                          matchers=_names(matchers, MATCHERS, "matcher"), n_jobs=jobs,
+                          scheduler=scheduler, quick=quick, n_points=points, seed=seed,
+                          backend=geodesic_backend, cache=not no_cache,
+                          progress=progress_enabled(), max_targets=max_targets)
+    report = write_report(ev, out_dir)
+    summary = {"report": str(report), "seconds": time.perf_counter() - t0,
+               "classes": ev.settings["classes"], "matchings": len(ev.records),
+               "correlation": {m: dict(zip(("rho", "p", "n"), correlation(ev, m)))
+                               for m in ev.settings["matchers"]}}
+    if as_json:
+        emit_json(summary)
+    else:
+        info(f"wrote {report} ({len(ev.records)} matchings, {summary['seconds']:.0f} s)")

@@ -1,0 +1,364 @@
+"""Evaluation of landmark methods by matching a class of shapes (paper Section 7, Figure 7).
+
+A *class folder* holds shapes with the same vertex count and vertex order, so
+the ground-truth correspondence is the identity on vertex ids (TOSCA).  For
+each landmark method:
+
+1. the **null shape** (lowest number in the file name) gets ``L`` landmarks
+   (the paper's counts ``PAPER_LANDMARKS``) on its metric shape (N samples);
+2. its symmetry score after 1, 3 and ``L`` landmarks is recorded (Figure 7a);
+3. the null shape is matched to every other shape of the class with the first
+   3 and with all ``L`` landmarks, target landmarks being the same vertex ids,
+   by each matcher (``pipeline.match_surfaces``), and the dense map's error is
+   measured (Figure 7b; ``metrics.py``).
+
+Errors are measured at the target's N FPS samples ``g``: the source vertex
+with the same id goes to the predicted ``p``, and ``d_t(p, g)`` is read from the
+target's distance rows (no extra geodesic solves).  The sample map's own error
+(source samples to target samples, the quantity LH05 optimises) is kept too.
+
+Per-target work is a joblib task (``run_tasks``): ``n_jobs`` local processes,
+or, given a Dask scheduler address, joblib's ``"dask"`` backend on that cluster
+(needs ``dask[distributed]``; every worker must see the dataset path and
+should share the cache folder ``$SHAPECOND_CACHE``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from shapecond.errors import InputError
+from shapecond.matching.metrics import errors_from_rows, normalise
+from shapecond.matching.pipeline import match_surfaces
+from shapecond.matching.sampled import sample_surface
+
+#: Landmark counts of the paper's Figure 7 per TOSCA class.
+PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog": 12,
+                   "centaur": 7, "cat": 7, "wolf": 5}
+DEFAULT_LANDMARKS = 10
+MESH_SUFFIXES = (".off", ".obj", ".ply")
+
+
+# --- landmark methods and scores ---------------------------------------------------
+
+def _fps_prefix(shape, k, seed=0):
+    """Farthest-point landmarks: the first k samples (FPS order, the paper's start)."""
+    idx = list(range(min(k, shape.n_samples)))
+    return dict(sample_indices=idx, scores=None)
+
+
+def _from_package(method):
+    def select(shape, k, seed=0):
+        from shapecond.landmarks import select_landmarks
+
+        res = select_landmarks(shape, k, method, seed=seed)
+        idx = getattr(res, "sample_indices", None)
+        if idx is None or len(idx) == 0:
+            idx = shape.landmark_indices(res.landmarks)
+        scores = getattr(res, "scores", None)
+        return dict(sample_indices=[int(i) for i in idx], scores=scores)
+
+    return select
+
+
+def landmark_method(name: str):
+    """Callable ``(shape, k, seed) -> dict(sample_indices, scores)`` for a method name.
+
+    Uses ``shapecond.landmarks.select_landmarks`` when it exists; FPS falls back
+    to the prefix of the metric shape's FPS order.
+    """
+    try:
+        from shapecond.landmarks import select_landmarks  # noqa: F401
+        return _from_package(name)
+    except ImportError:
+        if name == "fps":
+            return _fps_prefix
+        raise InputError(f"landmark method {name!r} is not available "
+                         "(shapecond.landmarks.select_landmarks is missing)") from None
+
+
+def symmetry_score(D, n_samples, landmarks, seed=0, quick=False) -> float:
+    """σ with the given sample indices fixed (Eq. 5): the project's score, lower bound.
+
+    ``shapecond.symmetry.score.symmetry_score`` when present, else the witness
+    search's lower bound.
+    """
+    try:
+        from shapecond.symmetry.score import symmetry_score as score
+    except ImportError:
+        score = None
+    if score is not None:
+        res = score(D, n_samples, list(landmarks))
+        for attr in ("lower", "sigma", "value"):
+            if hasattr(res, attr):
+                return float(getattr(res, attr))
+        return float(res[0] if isinstance(res, (tuple, list)) else res)
+    from shapecond.symmetry.search import witness_search
+
+    res = witness_search(D, n_samples, list(landmarks), seed=seed,
+                         effort="quick" if quick else "default",
+                         time_limit=10 if quick else 60)
+    return float(res.sigma)
+
+
+# --- class folders -----------------------------------------------------------------
+
+def class_shapes(folder) -> list[Path]:
+    """Mesh files of a class folder, null shape first (sorted by the number in the name)."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise InputError(f"{folder}: not a folder")
+    files = [p for p in folder.iterdir() if p.suffix.lower() in MESH_SUFFIXES]
+    if len(files) < 2:
+        raise InputError(f"{folder}: a class needs at least two shapes, found {len(files)}")
+
+    def key(p):
+        m = re.search(r"(\d+)$", p.stem)
+        return (int(m.group(1)) if m else math.inf, p.stem)
+
+    return sorted(files, key=key)
+
+
+def find_classes(dataset_dir, classes=None) -> dict[str, Path]:
+    """Class name -> folder; ``classes`` restricts (InputError for unknown names)."""
+    root = Path(dataset_dir)
+    if not root.is_dir():
+        raise InputError(f"{root}: not a folder")
+    found = {p.name: p for p in sorted(root.iterdir())
+             if p.is_dir() and any(q.suffix.lower() in MESH_SUFFIXES for q in p.iterdir())}
+    if classes:
+        missing = [c for c in classes if c not in found]
+        if missing:
+            raise InputError(f"class {missing[0]!r} not found in {root} "
+                             f"(found: {', '.join(found) or 'none'})")
+        found = {c: found[c] for c in classes}
+    if not found:
+        raise InputError(f"{root}: no class folders with meshes")
+    return found
+
+
+def check_compatible(null, other) -> None:
+    """InputError unless two shapes of a class have the same vertices (count and ids)."""
+    if null.n_vertices != other.n_vertices or not np.array_equal(null.ids, other.ids):
+        raise InputError(f"{other.name} has {other.n_vertices} vertices but {null.name} has "
+                         f"{null.n_vertices}: shapes of a class need the same vertex count and order")
+
+
+# --- per-target task ---------------------------------------------------------------
+
+@dataclass(frozen=True)
+class MatchRecord:
+    """One matching of the null shape to a target (one row of the evaluation)."""
+
+    cls: str
+    target: str
+    method: str
+    n_landmarks: int
+    matcher: str
+    error: float            # mean dense error, % of half the target's geodesic diameter
+    error_area: float       # mean dense error / sqrt(area)
+    sample_error: float     # mean sample-map error, % of half diameter
+    seconds: float
+    errors: np.ndarray = field(repr=False)  # per-evaluation-point dense errors (% half diam.)
+
+    def to_dict(self) -> dict:
+        d = {k: getattr(self, k) for k in ("cls", "target", "method", "n_landmarks", "matcher",
+                                          "error", "error_area", "sample_error", "seconds")}
+        return d
+
+
+def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_points, seed,
+                backend, cache, load=None):
+    """Match the sampled null shape ``source`` to one target for every setting.
+
+    Parameters
+    ----------
+    landmark_sets : dict method -> internal vertex ids (null shape) in order.
+    counts : landmark counts to use (prefixes).
+    load : optional callable path -> Geometry (tests); default ``load_geometry``.
+    """
+    from shapecond.shapes.io import load_geometry
+
+    load = load or load_geometry
+    source = sample_surface(load(null_path), n_points, backend, seed, cache=cache)
+    g = load(target_path)
+    check_compatible(source.geometry, g)
+    tgt = sample_surface(g, n_points, backend, seed, cache=cache)
+    half = 0.5 * tgt.diameter
+    area = tgt.unit ** 2 if g.faces is not None else None
+    out = []
+    for method, lm in landmark_sets.items():
+        for c in counts:
+            c = min(c, len(lm))
+            for matcher in matchers:
+                t0 = time.perf_counter()
+                m = match_surfaces(source, tgt, lm[:c], lm[:c], matcher=matcher, seed=seed)
+                # evaluation points: the target's own samples (same ids on the source)
+                raw = errors_from_rows(tgt.rows, m.vertex_map[tgt.samples])
+                raw_s = errors_from_rows(m.target.rows[m.sample_map.t], m.source.samples)
+                err = normalise(raw, 2 * half)
+                out.append(MatchRecord(
+                    cls, g.name, method, c, matcher, float(err.mean()),
+                    float(normalise(raw, 2 * half, area, "sqrt_area").mean()) if area else math.nan,
+                    float(normalise(raw_s, 2 * half).mean()), time.perf_counter() - t0,
+                    err.astype(np.float32)))
+    return out
+
+
+def run_tasks(tasks, n_jobs=1, scheduler=None, progress=False):
+    """Run ``(function, args, kwargs)`` tasks with joblib; results in completion order.
+
+    ``scheduler``: a Dask scheduler address (``tcp://host:8786``) or a
+    ``dask.distributed.Client``; joblib's ``"dask"`` backend then ships the tasks.
+    """
+    import joblib
+    from tqdm import tqdm
+
+    tasks = list(tasks)
+    bar = tqdm(total=len(tasks), desc="matching", unit="shape", disable=not progress)
+    if scheduler is not None:
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            raise InputError("--scheduler needs dask: pip install 'shapecond[dask]'") from None
+        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
+        ctx = joblib.parallel_config(backend="dask")
+    else:
+        client, ctx = None, joblib.parallel_config(backend="loky" if n_jobs != 1 else "sequential")
+    results = []
+    try:
+        with ctx:
+            par = joblib.Parallel(n_jobs=-1 if scheduler is not None else n_jobs,
+                                  return_as="generator_unordered")
+            for res in par(joblib.delayed(f)(*a, **k) for f, a, k in tasks):
+                results.append(res)
+                bar.update(1)
+    finally:
+        bar.close()
+        if client is not None and client is not scheduler:
+            client.close()
+    return results
+
+
+# --- orchestration -----------------------------------------------------------------
+
+def off_vertex_count(path: Path) -> int | None:
+    """Vertex count from an OFF header without reading the mesh (None if not OFF)."""
+    if path.suffix.lower() != ".off":
+        return None
+    with open(path) as fh:
+        tokens = []
+        for line in fh:
+            line = line.split("#")[0].strip()
+            if line:
+                tokens += line.split()
+            if len(tokens) >= 2:
+                break
+    head = tokens[0]
+    rest = head[3:] if head.upper().startswith("OFF") and len(head) > 3 else None
+    return int(rest if rest else tokens[1])
+
+
+def prepare_task(path, n_points, seed, backend, cache, with_metric=False):
+    """Geodesics of one shape (warms the caches); the null shape also gets its metric shape."""
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
+
+    g = load_geometry(path)
+    sample_surface(g, n_points, backend, seed, cache=cache)
+    if with_metric:
+        metric_shape(g, n_points, backend=backend, seed=seed, cache=cache)
+    return str(path)
+
+
+def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, quick):
+    """Landmarks of one method on the null shape and the score after 1, 3 and k of them."""
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
+
+    t0 = time.perf_counter()
+    shape = metric_shape(load_geometry(null_path), n_points, backend=backend, seed=seed, cache=cache)
+    sel = landmark_method(method)(shape, k, seed)
+    idx = [int(i) for i in sel["sample_indices"]][:k]
+    seconds = time.perf_counter() - t0
+    given = list(sel["scores"] or [])
+    scores = {}
+    for c in sorted({1, min(3, len(idx)), len(idx)}):
+        s = given[c - 1] if len(given) >= c and given[c - 1] is not None else None
+        scores[c] = float(s) if s is not None else symmetry_score(shape.D, shape.n_samples, idx[:c],
+                                                                  seed, quick)
+    return dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
+                ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, seconds=seconds)
+
+
+@dataclass
+class Evaluation:
+    """Everything ``evaluate_dataset`` measured (``report.py`` turns it into Markdown)."""
+
+    landmarks: list            # dicts of landmark_task
+    records: list              # MatchRecord
+    settings: dict
+    seconds: dict = field(default_factory=dict)
+
+
+def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "cnbs"),
+                     matchers=("lh05", "faq"), n_jobs=1, scheduler=None, quick=False,
+                     n_points=None, seed=0, backend="heat", cache=True, progress=False,
+                     max_targets=None) -> Evaluation:
+    """Run the Figure 7 evaluation on every class folder of ``dataset_dir``.
+
+    ``quick``: classes default to wolf and centaur (or the first two), at most 2
+    targets per class, N = 200 and the quick score search.
+    """
+    if quick and not classes:
+        names = list(find_classes(dataset_dir))
+        classes = [c for c in ("wolf", "centaur") if c in names] or names[:2]
+    found = find_classes(dataset_dir, classes)
+    n_points = n_points or (200 if quick else 400)
+    max_targets = max_targets or (2 if quick else None)
+    for m in methods:
+        landmark_method(m)  # unknown methods fail before any work
+    plan = {}
+    for cls, folder in found.items():
+        paths = class_shapes(folder)
+        counts = {p.name: off_vertex_count(p) for p in paths}
+        known = {c for c in counts.values() if c is not None}
+        if len(known) > 1:
+            raise InputError(f"class {cls}: shapes have different vertex counts "
+                             f"({', '.join(f'{k}: {v}' for k, v in counts.items())})")
+        plan[cls] = (paths[0], paths[1:][:max_targets] if max_targets else paths[1:],
+                     PAPER_LANDMARKS.get(cls, DEFAULT_LANDMARKS))
+    common = (n_points, seed, backend, cache)
+    timing = {}
+    t0 = time.perf_counter()
+    prep = [(prepare_task, (p, *common), dict(with_metric=(p == null)))
+            for null, targets, _ in plan.values() for p in [null, *targets]]
+    run_tasks(prep, n_jobs, scheduler, progress)
+    timing["geodesics"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lm_tasks = [(landmark_task, (cls, null, m, k, *common, quick), {})
+                for cls, (null, _, k) in plan.items() for m in methods]
+    landmarks = run_tasks(lm_tasks, n_jobs, scheduler, progress)
+    timing["landmarks"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    match_tasks = []
+    for cls, (null, targets, k) in plan.items():
+        sets = {d["method"]: d["vertices"] for d in landmarks if d["cls"] == cls}
+        sets = {m: sets[m] for m in methods}
+        counts = sorted({min(3, k), k})
+        for tp in targets:
+            match_tasks.append((target_task, (cls, null, tp, sets, counts, tuple(matchers), *common), {}))
+    records = [r for batch in run_tasks(match_tasks, n_jobs, scheduler, progress) for r in batch]
+    timing["matching"] = time.perf_counter() - t0
+    settings = dict(dataset=str(dataset_dir), classes=list(plan), methods=list(methods),
+                    matchers=list(matchers), n_points=n_points, seed=seed, backend=backend,
+                    quick=quick, n_jobs=n_jobs, scheduler=None if scheduler is None else str(scheduler),
+                    landmark_counts={c: v[2] for c, v in plan.items()},
+                    targets={c: [p.stem for p in v[1]] for c, v in plan.items()})
+    return Evaluation(landmarks, records, settings, timing)

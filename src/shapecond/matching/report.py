@@ -1,0 +1,214 @@
+"""Markdown report and PNG plots of an evaluation (paper Figure 7a/7b).
+
+Tables: the symmetry score after 1, 3 and all landmarks per class and method
+(Figure 7a); the mean dense matching error per class, method, matcher and
+landmark count (Figure 7b, % of half the target's geodesic diameter, and the
+Princeton normalisation by sqrt(area)); for each class, whether the method
+with the lowest score also has the lowest error; and Spearman's rank
+correlation between score and error over all (class, method, landmark count)
+cells, per matcher (the paper's claim: a lower score predicts easier matching,
+i.e. a positive correlation).  Plots: cumulative error curves per class and
+score against error.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import spearmanr
+
+from shapecond.matching.metrics import cumulative_curve
+
+THRESHOLDS = np.linspace(0.0, 50.0, 101)  # % of half the geodesic diameter
+
+
+def mean_errors(records, key="error"):
+    """{(cls, method, n_landmarks, matcher): mean over targets of the per-target mean}."""
+    acc = defaultdict(list)
+    for r in records:
+        acc[(r.cls, r.method, r.n_landmarks, r.matcher)].append(getattr(r, key))
+    return {k: float(np.mean(v)) for k, v in acc.items()}
+
+
+def score_table(landmarks):
+    """{(cls, method): {count: score}}."""
+    return {(d["cls"], d["method"]): {int(c): s for c, s in d["scores"].items()} for d in landmarks}
+
+
+def correlation(ev, matcher):
+    """Spearman ρ (and p) between score and mean error over (class, method, count) cells."""
+    scores = score_table(ev.landmarks)
+    errs = mean_errors(ev.records)
+    xs, ys = [], []
+    for (cls, method, c, m), e in errs.items():
+        s = scores.get((cls, method), {}).get(c)
+        if m == matcher and s is not None:
+            xs.append(1e12 if math.isinf(s) else s)
+            ys.append(e)
+    if len(xs) < 3:
+        return math.nan, math.nan, len(xs)
+    res = spearmanr(xs, ys)
+    return float(res.statistic), float(res.pvalue), len(xs)
+
+
+def _fmt(v, d=3):
+    if v is None or (isinstance(v, float) and math.isnan(v)):
+        return "-"
+    if isinstance(v, float) and math.isinf(v):
+        return "inf"
+    return f"{v:.{d}g}" if abs(v) < 1e4 else f"{v:.3e}"
+
+
+def markdown(ev, plots=()) -> str:
+    """The report text (see module docstring)."""
+    st = ev.settings
+    methods, matchers, classes = st["methods"], st["matchers"], st["classes"]
+    scores = score_table(ev.landmarks)
+    errs = mean_errors(ev.records)
+    errs_area = mean_errors(ev.records, "error_area")
+    serr = mean_errors(ev.records, "sample_error")
+    out = ["# Landmark evaluation (paper Section 7, Figure 7)", "",
+           f"Dataset `{st['dataset']}`; N = {st['n_points']} samples, {st['backend']} geodesics, "
+           f"seed {st['seed']}{', quick mode' if st['quick'] else ''}. Null shape matched to "
+           "every other shape of its class (ground truth: identity on vertex ids). Errors: mean "
+           "geodesic error of the dense map at the target's N samples, in % of half the "
+           "target's geodesic diameter (paper) unless stated.", "",
+           "Timings (s): " + ", ".join(f"{k} {v:.0f}" for k, v in ev.seconds.items()), ""]
+    out += ["## Symmetry score after 1, 3 and all landmarks (Figure 7a)", "",
+            "| class | L | " + " | ".join(f"{m} 1 / 3 / L" for m in methods) + " |",
+            "|---|---|" + "---|" * len(methods)]
+    for cls in classes:
+        L = st["landmark_counts"][cls]
+        cells = []
+        for m in methods:
+            sc = scores.get((cls, m), {})
+            cells.append(" / ".join(_fmt(sc.get(c)) for c in sorted(sc)))
+        out.append(f"| {cls} | {L} | " + " | ".join(cells) + " |")
+    for matcher in matchers:
+        out += ["", f"## Mean error, matcher {matcher} (Figure 7b)", "",
+                "| class | " + " | ".join(f"{m} 3 / L" for m in methods) + " | best at 3 | lowest score at 3 |",
+                "|---|" + "---|" * (len(methods) + 2)]
+        for cls in classes:
+            L = st["landmark_counts"][cls]
+            cnt = sorted({min(3, L), L})
+            cells, at3, sc3 = [], {}, {}
+            for m in methods:
+                vals = [errs.get((cls, m, c, matcher)) for c in cnt]
+                cells.append(" / ".join(_fmt(v) for v in vals))
+                at3[m] = vals[0]
+                sc3[m] = scores.get((cls, m), {}).get(cnt[0])
+            best = min((v, m) for m, v in at3.items() if v is not None)[1] if any(
+                v is not None for v in at3.values()) else "-"
+            low = min((v, m) for m, v in sc3.items() if v is not None)[1] if any(
+                v is not None for v in sc3.values()) else "-"
+            out.append(f"| {cls} | " + " | ".join(cells) + f" | {best} | {low} |")
+        rho, p, n = correlation(ev, matcher)
+        out += ["", f"Spearman rank correlation between score and error ({matcher}, {n} "
+                f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}."]
+    out += ["", "## Other error measures", "",
+            "| class | method | matcher | L | dense % half diam. | dense / sqrt(area) | sample map % |",
+            "|---|---|---|---|---|---|---|"]
+    for key in sorted(errs):
+        cls, m, c, matcher = key
+        out.append(f"| {cls} | {m} | {matcher} | {c} | {_fmt(errs[key])} | "
+                   f"{_fmt(errs_area.get(key), 3)} | {_fmt(serr.get(key))} |")
+    out += ["", "## Landmarks (null shape, file vertex ids)", ""]
+    for d in sorted(ev.landmarks, key=lambda d: (d["cls"], d["method"])):
+        out.append(f"- {d['cls']} {d['method']} ({d['seconds']:.1f} s): {d['ids']}")
+    if plots:
+        out += ["", "## Plots", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
+    return "\n".join(out) + "\n"
+
+
+def plot(ev, out_dir) -> list[Path]:
+    """Cumulative error curves (one panel per class) and score-vs-error scatter, as PNGs."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out_dir = Path(out_dir)
+    paths = []
+    st = ev.settings
+    for matcher in st["matchers"]:
+        classes = st["classes"]
+        cols = min(4, len(classes))
+        rows = math.ceil(len(classes) / cols)
+        fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.2 * rows), squeeze=False)
+        for ax, cls in zip(axes.ravel(), classes):
+            by = defaultdict(list)
+            for r in ev.records:
+                if r.cls == cls and r.matcher == matcher:
+                    by[(r.method, r.n_landmarks)].append(r.errors)
+            for (m, c), errs in sorted(by.items()):
+                ax.plot(THRESHOLDS, cumulative_curve(np.concatenate(errs), THRESHOLDS),
+                        label=f"{m} {c}", linestyle="-" if c <= 3 else "--")
+            ax.set_title(cls)
+            ax.set_xlabel("error, % of half diameter")
+            ax.set_ylim(0, 1)
+            ax.legend(fontsize=6)
+        for ax in axes.ravel()[len(classes):]:
+            ax.axis("off")
+        fig.tight_layout()
+        p = out_dir / f"error_curves_{matcher}.png"
+        fig.savefig(p, dpi=90)
+        plt.close(fig)
+        paths.append(p)
+    scores = score_table(ev.landmarks)
+    errs = mean_errors(ev.records)
+    fig, ax = plt.subplots(figsize=(5, 4))
+    for matcher, marker in zip(st["matchers"], "os^"):
+        for m in st["methods"]:
+            xs, ys = [], []
+            for (cls, mm, c, mt), e in errs.items():
+                s = scores.get((cls, mm), {}).get(c)
+                if mm == m and mt == matcher and s is not None and math.isfinite(s):
+                    xs.append(s)
+                    ys.append(e)
+            ax.scatter(xs, ys, marker=marker, label=f"{m} ({matcher})", s=18)
+    ax.set_xscale("log")
+    ax.set_xlabel("symmetry score σ with the landmarks fixed")
+    ax.set_ylabel("mean error, % of half diameter")
+    ax.legend(fontsize=6)
+    fig.tight_layout()
+    p = out_dir / "score_vs_error.png"
+    fig.savefig(p, dpi=90)
+    plt.close(fig)
+    return paths + [p]
+
+
+def write_report(ev, out_dir) -> Path:
+    """Write report.md, results.json and the PNGs into ``out_dir``; return the report path."""
+    from shapecond.shapes.io import atomic_write
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    plots = plot(ev, out_dir)
+    path = out_dir / "report.md"
+    with atomic_write(path) as tmp:
+        Path(tmp).write_text(markdown(ev, plots))
+    data = dict(settings=ev.settings, seconds=ev.seconds, landmarks=ev.landmarks,
+                records=[r.to_dict() for r in ev.records],
+                correlation={m: dict(zip(("rho", "p", "n"), correlation(ev, m)))
+                             for m in ev.settings["matchers"]})
+    with atomic_write(out_dir / "results.json") as tmp:
+        Path(tmp).write_text(json.dumps(_plain(data), indent=1, allow_nan=False))
+    return path
+
+
+def _plain(o):
+    """JSON-safe copy: inf -> "inf", nan -> null, numpy -> Python."""
+    if isinstance(o, dict):
+        return {str(k): _plain(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_plain(v) for v in o]
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (float, np.floating)):
+        v = float(o)
+        return None if math.isnan(v) else ("inf" if v == math.inf else ("-inf" if v == -math.inf else v))
+    return o

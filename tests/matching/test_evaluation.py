@@ -1,0 +1,129 @@
+"""Class evaluation and the ``evaluate`` command on generated class folders."""
+
+import importlib.util
+import json
+
+import numpy as np
+import pytest
+
+from shapecond.cli import main
+from shapecond.errors import InputError
+from shapecond.matching.evaluation import (Evaluation, MatchRecord, class_shapes, evaluate_dataset,
+                                          off_vertex_count)
+from shapecond.matching.report import correlation, markdown, write_report
+from shapecond.shapes.synthetic import plane_patch
+
+
+def _write_off(path, V, F):
+    path.write_text(f"OFF\n{len(V)} {len(F)} 0\n" + "\n".join(" ".join(map(str, v)) for v in V) + "\n"
+                    + "\n".join(f"3 {a} {b} {c}" for a, b, c in F) + "\n")
+
+
+def _bent(V, radius):
+    th = V[:, 0] / radius
+    return np.column_stack([radius * np.sin(th), V[:, 1], radius * (1 - np.cos(th))])
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    """One class 'strip': a flat 1 x 0.55 grid (strip0) and two bent copies, same vertex order."""
+    root = tmp_path_factory.mktemp("data")
+    (root / "strip").mkdir()
+    g = plane_patch(n=19)
+    V = g.vertices * [1.0, 0.55, 0.0]
+    _write_off(root / "strip" / "strip0.off", V, g.faces)
+    _write_off(root / "strip" / "strip7.off", _bent(V, 0.5), g.faces)
+    _write_off(root / "strip" / "strip12.off", _bent(V, 0.3) + [1.0, 2.0, 3.0], g.faces)
+    return root
+
+
+def test_null_shape_is_the_lowest_number(dataset):
+    names = [p.stem for p in class_shapes(dataset / "strip")]
+    assert names == ["strip0", "strip7", "strip12"]
+    assert off_vertex_count(dataset / "strip" / "strip0.off") == 19 * 19
+
+
+def test_evaluation_of_an_isometric_class(dataset, tmp_path):
+    ev = evaluate_dataset(dataset, methods=("fps",), matchers=("lh05", "faq"), n_points=60)
+    # 2 targets x counts {3, 10} x 2 matchers
+    assert len(ev.records) == 8
+    assert {r.n_landmarks for r in ev.records} == {3, 10}
+    # bending is an isometry: errors stay near the sample spacing (~ 10 % of half diameter here)
+    for r in ev.records:
+        assert r.error < 15.0, r
+        assert r.errors.shape == (60,)
+    lm = ev.landmarks[0]
+    assert set(lm["scores"]) == {1, 3, 10} and len(lm["ids"]) == 10
+    text = markdown(ev)
+    assert "| strip | 10 |" in text and "Spearman" in text
+    report = write_report(ev, tmp_path / "out")
+    assert report.exists() and (tmp_path / "out" / "score_vs_error.png").stat().st_size > 1000
+    data = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert len(data["records"]) == 8
+
+
+def test_class_with_different_vertex_counts_is_refused(dataset, tmp_path):
+    (tmp_path / "odd").mkdir()
+    for name in ("odd0.off", "odd1.off"):
+        (tmp_path / "odd" / name).write_bytes((dataset / "strip" / "strip0.off").read_bytes())
+    g = plane_patch(n=9)
+    _write_off(tmp_path / "odd" / "odd2.off", g.vertices, g.faces)
+    with pytest.raises(InputError, match="different vertex counts"):
+        evaluate_dataset(tmp_path, methods=("fps",), n_points=20)
+
+
+def test_unknown_class_and_method_are_input_errors(dataset):
+    with pytest.raises(InputError, match="not found"):
+        evaluate_dataset(dataset, classes=["horse"], methods=("fps",))
+    with pytest.raises(InputError):
+        evaluate_dataset(dataset, methods=("no-such-method",), n_points=20)
+
+
+def _fake(scores_errors):
+    """An Evaluation with one cell per (method, score, error)."""
+    lms, recs = [], []
+    for i, (s, e) in enumerate(scores_errors):
+        lms.append(dict(cls="c", method=f"m{i}", ids=[], scores={3: s}, seconds=0.0))
+        recs.append(MatchRecord("c", "t", f"m{i}", 3, "faq", e, e, e, 0.0, np.zeros(1)))
+    settings = dict(dataset="d", classes=["c"], methods=[f"m{i}" for i in range(len(lms))],
+                    matchers=["faq"], n_points=10, seed=0, backend="heat", quick=False,
+                    landmark_counts={"c": 3})
+    return Evaluation(lms, recs, settings)
+
+
+def test_spearman_against_known_orderings():
+    same = _fake([(0.1, 1.0), (0.5, 2.0), (2.0, 3.0), (float("inf"), 9.0)])
+    assert correlation(same, "faq")[0] == pytest.approx(1.0)
+    assert correlation(same, "faq")[2] == 4
+    rev = _fake([(0.1, 9.0), (0.5, 3.0), (2.0, 2.0), (3.0, 1.0)])
+    assert correlation(rev, "faq")[0] == pytest.approx(-1.0)
+    assert "ρ = 1" in markdown(same)
+
+
+def test_evaluate_command_with_two_jobs(dataset, tmp_path, capsys):
+    with pytest.raises(SystemExit) as ex:
+        main(["evaluate", str(dataset), "--methods", "fps", "--matchers", "faq", "--points", "40",
+              "--jobs", "2", "--out", str(tmp_path / "rep"), "--json"])
+    out, err = capsys.readouterr()
+    assert ex.value.code == 0, err
+    summary = json.loads(out)
+    assert summary["matchings"] == 4 and (tmp_path / "rep" / "report.md").exists()
+
+
+def test_evaluate_command_errors(dataset, tmp_path, capsys):
+    with pytest.raises(SystemExit) as ex:
+        main(["evaluate", str(dataset), "--matchers", "lh06", "--out", str(tmp_path / "r")])
+    _, err = capsys.readouterr()
+    assert ex.value.code == 2 and "unknown matcher 'lh06'" in err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("distributed") is None,
+                    reason="dask.distributed is not installed (optional extra 'dask')")
+def test_dask_backend_on_a_local_cluster(dataset):
+    from dask.distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False) as cluster, \
+            Client(cluster) as client:
+        ev = evaluate_dataset(dataset, methods=("fps",), matchers=("faq",), n_points=40,
+                              scheduler=client)
+    assert len(ev.records) == 4
