@@ -1,0 +1,413 @@
+"""Condition Number Based Sampling, global version (paper Section 6; DESIGN.md 3, "CNBS heat map").
+
+CNBS greedily adds the landmark that lowers the global symmetry score σ (paper Eq. 5)
+most.  The heat map of a step is σ with each candidate sample p fixed in addition to
+the landmarks L so far (paper Figures 1 and 4); the next landmark is its argmin.  The
+scores after each landmark form the "vector of symmetry scores" of Section 6.
+
+σ is known only through a lower bound with a witness map (``witness_search``), so the
+heat map is a lower bound per candidate, assembled as in DESIGN.md 3:
+
+1. **Fixed by the witness.**  If the best witness map T of the previous step already
+   fixes p (T(p) = p, e.g. p on the mirror plane of a mirror witness), T is feasible
+   with p fixed, so the bound does not move: heat[p] = σ_L.  No search is run.
+2. **Warm start.**  Otherwise each of the best ``n_maps`` distinct witness maps is
+   repaired by one move so that T(p) = p (swap p with its pre-image q, T(q) := T(p);
+   or, with dense targets when p is nobody's image, reassign T(p) := p), and the
+   compiled local search is re-run from these starts only, with L ∪ {p} fixed
+   (``WarmPolisher``).
+3. **Floor.**  The best single swap of two samples avoiding L ∪ {p}, for every p at
+   once from one O(N³) table (``swap_scores``): heat[p] ≥ it.
+4. **Re-solves.**  The candidates the witness maps move farthest
+   (max over maps of D[p, T(p)]) are where fixing p hurts the witness most and where
+   the argmin lies; the ``resolve_fraction`` (default 20 %) of them with the largest
+   move are searched again; heat[p] is the max of all bounds.  DESIGN.md's prototype
+   re-solved them with a fresh multistart search; here a fresh ``witness_search``
+   costs 8-18 s at N = 400 on the shared machine (its spectral and Gilmore-Lawler
+   starts do not depend on p but are recomputed), so the default re-solve is an
+   iterated local search instead: ``N_KICKS`` random kicks of the candidate's best
+   map and of the repaired base maps, each polished (``resolve="ils"``);
+   ``resolve="full"`` gives the prototype's behaviour.  Whether the argmin agrees
+   with full re-solves of every candidate is checked in tests (small N) and in
+   ``benchmarks/bench_landmarks.py``.
+5. **Leader verification.**  The argmin is searched again from the best maps found
+   for the ``n_cross`` highest-valued other candidates (repaired to fix it) and, for
+   N <= ``FULL_VERIFY_N``, by a fresh ``witness_search``; if its value rises, the new
+   argmin is verified in turn (at most ``max_verify`` rounds).  Warm starts alone can
+   miss a map that only exists with p fixed; this catches it where it matters.
+
+Ties (all heat values inf on an exactly symmetric shape, for instance) are broken by
+the larger move, then the smaller index.  Everything is deterministic given ``seed``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..symmetry.objective import ISOMETRY_RTOL
+
+#: Share of the candidates, those moved farthest by the witness maps, that get a
+#: full re-solve in every heat map (DESIGN.md 3: 20 % kept the argmin at N = 400).
+RESOLVE_FRACTION = 0.2
+#: Number of best distinct witness maps used as warm starts.
+N_MAPS = 4
+#: Kicked restarts per re-solved candidate (``resolve="ils"``).
+N_KICKS = 6
+#: Up to this N the leaders of a heat map are verified by a fresh witness_search.
+FULL_VERIFY_N = 200
+
+
+def swap_scores(D: np.ndarray, n: int) -> np.ndarray:
+    """σ of every single swap (a b) of the identity on the samples: (n, n), 0 on the diagonal.
+
+    Swapping a and b gives d² = 2 D[a,b]² and Dist² = 4 Σ_{c ≠ a,b} (D[a,c] − D[b,c])²
+    (ordered pairs, columns over X), so σ_ab² = D[a,b]² / (2 Σ_c ...).  A swap with
+    round-off distortion (``objective.is_isometry``) scores inf.
+    """
+    Dx = np.asarray(D, float)[:n, :n]
+    sq = (Dx**2).sum(axis=1)
+    row = sq[:, None] + sq[None, :] - 2.0 * Dx @ Dx  # ‖D_a − D_b‖² (Dx symmetric)
+    dist2 = 4.0 * np.maximum(row - 2.0 * Dx**2, 0.0)
+    d2 = 2.0 * Dx**2
+    scale2 = float((Dx**2).sum())
+    iso = dist2 <= ISOMETRY_RTOL**2 * scale2  # round-off distortion: an isometry
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.sqrt(d2 / np.where(iso, 1.0, dist2))
+    s[iso & (d2 > 0)] = np.inf
+    np.fill_diagonal(s, 0.0)
+    return s
+
+
+def best_swap_avoiding(S: np.ndarray, fixed, candidates) -> np.ndarray:
+    """For each candidate p, the best swap score over pairs avoiding ``fixed`` ∪ {p}."""
+    S = S.copy()
+    n = S.shape[0]
+    fixed = list(fixed)
+    S[fixed, :] = -np.inf
+    S[:, fixed] = -np.inf
+    np.fill_diagonal(S, -np.inf)
+    out = np.full(n, -np.inf)
+    flat = int(np.argmax(S))
+    a, b = divmod(flat, n)
+    top = S[a, b]
+    for v in (a, b):
+        T = S.copy()
+        T[v, :] = -np.inf
+        T[:, v] = -np.inf
+        out[v] = T.max()
+    cand = np.asarray(list(candidates), dtype=np.int64)
+    res = np.where((cand == a) | (cand == b), out[cand], top)
+    return np.maximum(res, 0.0)
+
+
+def repair_fixing(t: np.ndarray, p: int) -> np.ndarray:
+    """One move making T(p) = p: swap with p's pre-image, or reassign p to itself."""
+    t = np.array(t, dtype=np.int64, copy=True)
+    if t[p] == p:
+        return t
+    pre = np.flatnonzero(t == p)
+    if pre.size:
+        q = int(pre[0])
+        t[q] = t[p]
+    t[p] = p
+    return t
+
+
+@dataclass
+class HeatMap:
+    """σ lower bound with each candidate sample fixed (paper Figures 1 and 4).
+
+    ``values[p]`` is nan for p in ``landmarks`` (not a candidate); ``results[p]`` is
+    the search result whose witness attains the warm/full part of ``values[p]``.
+    """
+
+    values: np.ndarray
+    sigma_before: float
+    landmarks: tuple
+    moved: np.ndarray
+    resolved: np.ndarray
+    results: dict = field(repr=False, default_factory=dict)
+    seconds: float = 0.0
+
+    def improvement(self) -> np.ndarray:
+        """σ before minus σ with p fixed (0 where the witness fixes p)."""
+        with np.errstate(invalid="ignore"):
+            return np.where(np.isinf(self.values) & np.isinf(self.sigma_before), 0.0,
+                            self.sigma_before - self.values)
+
+    def argmin(self) -> int:
+        cand = np.flatnonzero(~np.isnan(self.values))
+        order = np.lexsort((cand, -self.moved[cand], self.values[cand]))
+        return int(cand[order[0]])
+
+
+def _search_module():
+    from ..symmetry import search
+
+    return search
+
+
+class WarmPolisher:
+    """Local search from repaired warm maps only (step 2 of the module docstring).
+
+    ``witness_search`` always adds its own multistart families (seconds per call at
+    N = 400 even with ``effort="quick"``), far too slow once per candidate.  This
+    runs the search's compiled local search (``_kernels.local_search``) from the base
+    maps repaired by one move.  The products G = D_XX D[T, :] and H of each base map
+    are computed once per heat map; the repair move updates them by the rank-1
+    formulas of ``objective.swap_delta`` / ``reassign_delta`` (O(N·M) instead of the
+    O(N²·M) product), so a candidate costs a copy and a few local moves.  Values are
+    re-scored exactly (``search._Pool``).  Uses the search's private ``_Stage`` (for
+    the dense-target neighbour lists) and ``_Pool``.
+    """
+
+    def __init__(self, D, n, maps):
+        from ..symmetry import _kernels as K
+        from ..symmetry import objective as obj
+
+        self.K, self.obj, self.search = K, obj, _search_module()
+        self.D = np.ascontiguousarray(np.asarray(D, dtype=np.float64))
+        self.n = n = int(n)
+        m = self.D.shape[0]
+        allfree = np.arange(n, dtype=np.int64)
+        if m > n:
+            stage = self.search._Stage(self.D, n, allfree, self.search.DENSE_K)
+        else:
+            stage = self.search._Stage(self.D, n, allfree, 0)
+        self.knn, self.floor = stage.knn, stage.floor
+        self.base = []
+        for t in maps:
+            t = np.asarray(t, dtype=np.int64).copy()
+            G = self.D[:n, :n] @ self.D[t, :]
+            H = np.sum(self.D[t, :] ** 2, axis=0)
+            self.base.append((t, G, H, obj.d2(self.D, t), obj.dist2(self.D, t)))
+
+    def __call__(self, landmarks, p, extra_starts=()):
+        """Best local optimum from the base maps repaired to fix ``p`` (and any extra starts)."""
+        K, obj, D, n = self.K, self.obj, self.D, self.n
+        m = D.shape[0]
+        lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
+        free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
+        pool = self.search._Pool(D, n)
+        for t0, G0, H0, d2v, dist2v in self.base:
+            t, G, H = t0.copy(), G0.copy(), H0.copy()
+            used = np.zeros(m, dtype=bool)
+            used[t] = True
+            if t[p] != p:
+                pre = np.flatnonzero(t == p)
+                if pre.size:
+                    q = int(pre[0])
+                    dd, dD = obj.swap_delta(D, t, G, p, q)
+                    K.apply_swap(D, n, t, G, p, q)
+                else:
+                    dd, dD = obj.reassign_delta(D, t, G, H, p, p)
+                    K.apply_reassign(D, n, t, G, H, used, p, p)
+                d2v, dist2v = d2v + dd, dist2v + dD
+            if np.any(t[lm] != lm):
+                continue  # a base map that moves a landmark (cannot happen for true warm maps)
+            K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, d2v, dist2v,
+                           self.floor, 50 * n)
+            pool.add(t)
+        for t in extra_starts:
+            t = self.search.S.repair(t, n, m, lm)
+            G = D[:n, :n] @ D[t, :]
+            H = np.sum(D[t, :] ** 2, axis=0)
+            used = np.zeros(m, dtype=bool)
+            used[t] = True
+            K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, obj.d2(D, t),
+                           obj.dist2(D, t), self.floor, 50 * n)
+            pool.add(t)
+        tops = [it for it in pool.top(self.search.KEEP) if it[0] > 0.0]
+        if not tops:
+            return None
+        sig = [math.inf if it[0] == math.inf else math.sqrt(it[0]) for it in tops]
+        v, t, num, den = tops[0]
+        return self.search.SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den,
+                                        maps=tuple(it[1] for it in tops), sigmas=tuple(sig), seconds=0.0)
+
+
+def _maps_of(res, n_maps):
+    maps = list(getattr(res, "maps", None) or [])
+    if not maps:
+        maps = [res.witness]
+    return [np.asarray(m, dtype=np.int64) for m in maps[:n_maps]]
+
+
+def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: str = "default",
+             n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
+             resolve: str = "ils", n_kicks: int = N_KICKS, n_cross: int = 24, max_verify: int = 8,
+             progress=None) -> HeatMap:
+    """The CNBS heat map: σ (lower bound) with each candidate sample fixed.
+
+    Parameters
+    ----------
+    D : (M, M) array; the first ``n_samples`` points are the samples X.
+    landmarks : sample indices already fixed.
+    base : SearchResult of ``witness_search`` with ``landmarks`` fixed (computed when None).
+    effort : effort of the base search and of the full re-solves (warm starts are polished only).
+    resolve_fraction : share of candidates (moved farthest) re-solved; 1.0 re-solves all.
+    resolve : "ils" (default: ``n_kicks`` random kicks of the candidate's best map and of
+        the repaired base maps, each polished) or "full" (a fresh ``witness_search``
+        with ``effort``, seconds per candidate at N = 400).
+    progress : callable(done, total) or None.
+    """
+    t0 = time.perf_counter()
+    search = _search_module()
+    D = np.ascontiguousarray(np.asarray(D, dtype=float))
+    n = D.shape[0] if n_samples is None else int(n_samples)
+    L = [int(v) for v in landmarks]
+    if len(set(L)) != len(L) or any(not 0 <= v < n for v in L):
+        raise InputError("landmarks must be distinct sample indices")
+    if resolve not in ("ils", "full"):
+        raise InputError(f"resolve must be 'ils' or 'full', got {resolve!r}")
+    if not 0.0 <= resolve_fraction <= 1.0:
+        raise InputError("resolve fraction must lie in [0, 1]")
+    if base is None:
+        base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
+    sigma0 = float(base.sigma)
+    maps = _maps_of(base, n_maps)
+    cand = np.array([p for p in range(n) if p not in set(L)], dtype=np.int64)
+    if cand.size == 0:
+        raise InputError("every sample is already a landmark")
+    values = np.full(n, np.nan)
+    moved = np.zeros(n)
+    for t in maps:
+        moved = np.maximum(moved, D[np.arange(n), t])
+    floor = best_swap_avoiding(swap_scores(D, n), L, cand)
+    results = {}
+    best_t = maps[0]
+    polish = WarmPolisher(D, n, maps)
+    total = cand.size
+    for k, p in enumerate(cand):
+        p = int(p)
+        if best_t[p] == p:
+            values[p] = sigma0
+            results[p] = base
+        else:
+            r = polish(L + [p], p)
+            values[p] = 0.0 if r is None else float(r.sigma)
+            if r is not None:
+                results[p] = r
+        if progress:
+            progress(k + 1, total)
+    values[cand] = np.maximum(values[cand], floor)
+    n_full = int(math.ceil(resolve_fraction * cand.size))
+    order = cand[np.lexsort((cand, -moved[cand]))]
+    resolved = np.zeros(n, dtype=bool)
+    rng = np.random.default_rng(seed)
+    for p in order[:n_full]:
+        p = int(p)
+        if moved[p] == 0.0:
+            continue  # fixed by every witness map: the bound sigma0 is attained already
+        if resolve == "full":
+            r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort)
+        else:  # "ils": kicks of the candidate's best map and of the base maps, polished
+            free = np.setdiff1d(np.arange(n), L + [p])
+            hi = max(3, free.size // 8)
+            seeds = [results[p].witness] if p in results else []
+            seeds += [repair_fixing(t, p) for t in maps]
+            starts = [search._kick(rng, seeds[i % len(seeds)], free, int(rng.integers(2, hi + 1)))
+                      for i in range(n_kicks)]
+            r = polish(L + [p], p, extra_starts=starts)
+        resolved[p] = True
+        if r is not None and (float(r.sigma) > values[p] or p not in results):
+            values[p] = float(r.sigma)
+            results[p] = r
+    # 5. verify the leaders: the current argmin is searched again from the best maps
+    # found for the other candidates (any of them, repaired to fix p, is feasible) and,
+    # for N <= FULL_VERIFY_N or resolve="full", by a fresh witness_search warm-started
+    # from its own best map; repeat until the argmin is a verified candidate.
+    verified = np.zeros(n, dtype=bool)
+    donors = sorted((p for p in results if p not in L), key=lambda p: -values[p])[:n_cross]
+    donor_maps = [results[p].witness for p in donors]
+    for _ in range(max_verify):
+        hm_tmp = HeatMap(values, sigma0, tuple(L), moved, resolved)
+        c = hm_tmp.argmin()
+        if verified[c]:
+            break
+        verified[c] = True
+        if moved[c] == 0.0:
+            break  # fixed by the witness: its value sigma0 is attained and maximal
+        starts = [repair_fixing(t, c) for t in donor_maps]
+        r = polish(L + [c], c, extra_starts=starts)
+        if resolve == "full" or n <= FULL_VERIFY_N:
+            own = [results[c].witness] if c in results else []
+            r2 = search.witness_search(D, n_samples=n, landmarks=L + [c], seed=seed, starts=own,
+                                       effort=effort)
+            r = r2 if r is None or float(r2.sigma) > float(r.sigma) else r
+        if r is not None and float(r.sigma) > values[c]:
+            values[c] = float(r.sigma)
+            results[c] = r
+    # values are not clipped at sigma0: a value above it means the search with p fixed
+    # found a better witness than the base search did (then sigma0 was weak).
+    return HeatMap(values, sigma0, tuple(L), moved, resolved, results, time.perf_counter() - t0)
+
+
+def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = "default"):
+    """Reference heat map: a full multistart search for every candidate (slow; tests, benchmarks)."""
+    search = _search_module()
+    D = np.asarray(D, dtype=float)
+    n = D.shape[0] if n_samples is None else int(n_samples)
+    L = [int(v) for v in landmarks]
+    values = np.full(n, np.nan)
+    for p in range(n):
+        if p not in L:
+            values[p] = float(search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed,
+                                                    effort=effort).sigma)
+    return values
+
+
+def _swap_witness(D, n, L, base):
+    S = swap_scores(D, n)
+    S[L, :] = -np.inf
+    S[:, L] = -np.inf
+    np.fill_diagonal(S, -np.inf)
+    a, b = divmod(int(np.argmax(S)), n)
+    t = np.arange(n, dtype=np.int64)
+    t[a], t[b] = b, a
+    return WarmPolisher(D, n, _maps_of(base, N_MAPS))(L, L[-1], extra_starts=[t])
+
+
+def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
+                   n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
+                   resolve: str = "ils", progress=None, keep_heat_maps: bool = False):
+    """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
+
+    Returns
+    -------
+    dict with ``landmarks`` (new sample indices in order), ``scores`` (σ lower bound
+    after each), ``initial_score`` (σ with only ``fixed``), ``heat_maps`` (list of
+    HeatMap when ``keep_heat_maps``), ``witness`` (final witness map).
+    """
+    search = _search_module()
+    D = np.ascontiguousarray(np.asarray(D, dtype=float))
+    n = D.shape[0] if n_samples is None else int(n_samples)
+    L = [int(v) for v in fixed]
+    if k < 0 or k + len(L) > n:
+        raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(L)} already fixed)")
+    base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
+    initial = float(base.sigma)
+    new, scores, maps = [], [], []
+    for step in range(k):
+        hm = heat_map(D, n, L, base=base, seed=seed, effort=effort, n_maps=n_maps,
+                      resolve_fraction=resolve_fraction, resolve=resolve,
+                      progress=(lambda d, t, s=step: progress(s, d, t)) if progress else None)
+        c = hm.argmin()
+        new.append(c)
+        scores.append(float(hm.values[c]))
+        base = hm.results[c]
+        if float(base.sigma) < hm.values[c]:
+            # the single-swap floor won: continue from a witness that attains it
+            base = _swap_witness(D, n, L + [c], base)
+        L.append(c)
+        if keep_heat_maps:
+            maps.append(hm)
+        else:
+            hm.results.clear()
+    return {"landmarks": new, "scores": scores, "initial_score": initial, "heat_maps": maps,
+            "witness": np.asarray(base.witness)}
