@@ -69,6 +69,7 @@ def test_affinity_matrix_matches_definition():
     cand = k_best_candidates(Ds, Dt, [0], [truth[0]], k=3)
     s = 0.2
     M = affinity_matrix(Ds, Dt, cand, s)
+    assert np.allclose(M, affinity_matrix(Ds, Dt, cand, s, compiled=False), rtol=1e-5, atol=1e-7)
     for a in range(cand.size):
         for b in range(cand.size):
             x, y, x2, y2 = cand.source[a], cand.target[a], cand.source[b], cand.target[b]

@@ -36,7 +36,7 @@ import numpy as np
 from shapecond.errors import InputError
 from shapecond.matching.metrics import errors_from_rows, normalise
 from shapecond.matching.pipeline import match_surfaces
-from shapecond.matching.sampled import sample_surface
+from shapecond.matching.sampled import CachedSolver, sample_surface
 
 #: Landmark counts of the paper's Figure 7 per TOSCA class.
 PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog": 12,
@@ -190,6 +190,7 @@ def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_
     g = load(target_path)
     check_compatible(source.geometry, g)
     tgt = sample_surface(g, n_points, backend, seed, cache=cache)
+    solvers = (CachedSolver(source.geometry, backend), CachedSolver(g, backend))
     half = 0.5 * tgt.diameter
     area = tgt.unit ** 2 if g.faces is not None else None
     out = []
@@ -198,7 +199,8 @@ def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_
             c = min(c, len(lm))
             for matcher in matchers:
                 t0 = time.perf_counter()
-                m = match_surfaces(source, tgt, lm[:c], lm[:c], matcher=matcher, seed=seed)
+                m = match_surfaces(source, tgt, lm[:c], lm[:c], matcher=matcher, seed=seed,
+                                   source_solver=solvers[0], target_solver=solvers[1])
                 # evaluation points: the target's own samples (same ids on the source)
                 raw = errors_from_rows(tgt.rows, m.vertex_map[tgt.samples])
                 raw_s = errors_from_rows(m.target.rows[m.sample_map.t], m.source.samples)

@@ -60,17 +60,18 @@ def match_samples(D_source, D_target, landmarks_source, landmarks_target, matche
 
 def match_surfaces(source: SampledSurface, target: SampledSurface, landmarks_source,
                    landmarks_target, matcher: str = "lh05", dense: str = "distances",
-                   seed: int = 0, **options) -> DenseMatch:
+                   seed: int = 0, source_solver=None, target_solver=None, **options) -> DenseMatch:
     """Match two sampled surfaces whose landmark vertices (internal ids) are given.
 
-    Landmarks that are not samples yet are inserted (``sampled.insert_landmarks``).
+    Landmarks that are not samples yet are inserted (``sampled.insert_landmarks``,
+    with the optional solvers, e.g. ``sampled.CachedSolver``, for their rows).
     """
     ls = np.asarray(landmarks_source, dtype=np.int64).reshape(-1)
     lt = np.asarray(landmarks_target, dtype=np.int64).reshape(-1)
     if ls.size != lt.size:
         raise InputError(f"landmark counts differ: {ls.size} on the source, {lt.size} on the target")
-    source, ils = insert_landmarks(source, ls)
-    target, ilt = insert_landmarks(target, lt)
+    source, ils = insert_landmarks(source, ls, source_solver)
+    target, ilt = insert_landmarks(target, lt, target_solver)
     sm = match_samples(source.D, target.D, ils, ilt, matcher, seed=seed, **options)
     vmap = dense_map(source, target, sm.t, method=dense)
     # landmarks map exactly onto their images

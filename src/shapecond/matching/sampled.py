@@ -100,6 +100,28 @@ class _RecordingSolver:
         return out
 
 
+class CachedSolver:
+    """A DistanceSolver built on first use that remembers every row it computed.
+
+    Used when many landmark sets are inserted into the same shape: the heat
+    method's factorisation is made once and shared landmarks are solved once.
+    """
+
+    def __init__(self, geometry: Geometry, backend: str = "heat"):
+        self.geometry, self.backend, self.n = geometry, backend, geometry.n_vertices
+        self._solver, self._rows = None, {}
+
+    def distances(self, sources):
+        sources = [int(s) for s in np.atleast_1d(sources)]
+        todo = [s for s in dict.fromkeys(sources) if s not in self._rows]
+        if todo:
+            if self._solver is None:
+                self._solver = DistanceSolver(self.geometry, self.backend)
+            for s, row in zip(todo, self._solver.distances(todo)):
+                self._rows[s] = row
+        return np.stack([self._rows[s] for s in sources]) if sources else np.empty((0, self.n))
+
+
 def _key(geometry: Geometry, n_points: int, backend: str, seed: int, landmarks) -> str:
     h = hashlib.sha256()
     for arr in (geometry.vertices, geometry.faces, geometry.ids):
