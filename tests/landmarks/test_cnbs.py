@@ -1,0 +1,130 @@
+"""CNBS, global version: heat map pieces against brute force, greedy choice against exact σ."""
+
+import math
+
+import numpy as np
+import pytest
+
+from shapecond.landmarks.cnbs import (HeatMap, best_swap_avoiding, cnbs_landmarks, heat_map, repair_fixing,
+                                      swap_scores)
+from shapecond.symmetry.exact import exact_sigma
+from shapecond.symmetry.objective import map_score
+
+
+def _dist(P):
+    D = np.linalg.norm(P[:, None] - P[None], axis=2)
+    return D / D.max()
+
+
+def near_symmetric(n, seed, noise=0.03, dim=3):
+    """Points in mirror pairs (x -> -x) plus a few on the plane, perturbed."""
+    rng = np.random.default_rng(seed)
+    half = rng.normal(size=((n - 2) // 2, dim))
+    half[:, 0] = np.abs(half[:, 0]) + 0.2
+    mirror = half * np.r_[-1.0, np.ones(dim - 1)]
+    plane = rng.normal(size=(n - 2 * half.shape[0], dim))
+    plane[:, 0] = 0.0
+    P = np.vstack([half, mirror, plane]) + noise * rng.normal(size=(n, dim))
+    return _dist(P)
+
+
+def test_swap_scores_match_map_score():
+    rng = np.random.default_rng(3)
+    D = _dist(rng.normal(size=(9, 3)))
+    for n in (9, 6):  # bijections, and dense targets (samples = first 6 of 9)
+        S = swap_scores(D, n)
+        for a in range(n):
+            for b in range(n):
+                if a != b:
+                    t = np.arange(n)
+                    t[a], t[b] = b, a
+                    assert math.isclose(S[a, b], map_score(D, t), rel_tol=1e-9)
+
+
+def test_swap_of_an_isometry_is_inf():
+    # square: swapping two opposite corners... is not an isometry; a 2-point space is
+    D = np.array([[0.0, 1.0, 0.5], [1.0, 0.0, 0.5], [0.5, 0.5, 0.0]])
+    assert swap_scores(D, 3)[0, 1] == np.inf
+
+
+def test_best_swap_avoiding_brute_force():
+    rng = np.random.default_rng(4)
+    D = _dist(rng.normal(size=(10, 3)))
+    S = swap_scores(D, 10)
+    fixed = [2]
+    cand = [p for p in range(10) if p not in fixed]
+    got = best_swap_avoiding(S, fixed, cand)
+    for p, g in zip(cand, got):
+        bad = set(fixed) | {p}
+        want = max(S[a, b] for a in range(10) for b in range(10) if a != b and a not in bad and b not in bad)
+        assert math.isclose(g, want, rel_tol=1e-12)
+
+
+def test_repair_fixing_one_move():
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        n, m = 8, 12
+        t = rng.choice(m, n, replace=False)
+        p = int(rng.integers(n))
+        r = repair_fixing(t, p)
+        assert r[p] == p and len(set(r.tolist())) == n
+        assert np.sum(r != t) <= 2
+
+
+def test_heat_map_is_a_bracketed_lower_bound():
+    """Each value is a σ of a feasible map (<= exact σ with p fixed) and >= the swap floor."""
+    for seed in range(6):
+        D = near_symmetric(7, seed)
+        hm = heat_map(D, 7, landmarks=[], seed=seed)
+        S = swap_scores(D, 7)
+        for p in range(7):
+            ex = exact_sigma(D, 7, landmarks=[p]).sigma
+            assert hm.values[p] <= ex * (1 + 1e-9)
+            floor = best_swap_avoiding(S, [], [p])[0]
+            assert hm.values[p] >= floor * (1 - 1e-12)
+            if hm.results.get(p) is not None and hm.values[p] == hm.results[p].sigma:
+                w = hm.results[p].witness
+                assert w[p] == p and math.isclose(map_score(D, w), hm.values[p], rel_tol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_greedy_choice_equals_exact_argmin(seed):
+    """For 3 steps, the CNBS landmark has the smallest exact σ among the candidates."""
+    n = 8
+    D = near_symmetric(n, 10 + seed, noise=0.05)
+    out = cnbs_landmarks(D, n, 3, seed=0)
+    L = []
+    for c, score in zip(out["landmarks"], out["scores"]):
+        exact = {p: exact_sigma(D, n, landmarks=L + [p]).sigma for p in range(n) if p not in L}
+        best = min(exact.values())
+        assert exact[c] <= best * (1 + 1e-6), (L, c, exact)
+        assert math.isclose(score, exact[c], rel_tol=1e-6)
+        L.append(c)
+
+
+def test_argmin_tie_breaks_by_move_then_index():
+    hm = HeatMap(np.array([np.nan, 1.0, 1.0, 2.0]), 3.0, (0,), np.array([0.0, 0.2, 0.5, 0.9]),
+                 np.zeros(4, bool))
+    assert hm.argmin() == 2
+    assert list(hm.improvement()[1:]) == [2.0, 2.0, 1.0]
+
+
+def test_animal_first_landmark_off_the_mirror_plane():
+    """Generated near-symmetric animal, N = 100 (issue 6 'done when')."""
+    from shapecond.shapes.metric import metric_shape
+    from shapecond.shapes.synthetic import animal
+
+    g = animal(delta=0.05)
+    shape = metric_shape(g, n_points=100, cache=False)
+    x = np.abs(g.vertices[shape.samples[:100], 0])
+    on_plane = x < 1e-9
+    assert on_plane.sum() >= 3
+    hm = heat_map(shape.D, 100, seed=0)
+    c = hm.argmin()
+    assert not on_plane[c]
+    imp = hm.improvement()
+    # samples on the mirror plane are fixed by the mirror witness: no improvement,
+    # the smallest of all candidates
+    assert np.allclose(imp[on_plane], 0.0)
+    assert imp[on_plane].max() <= np.nanmin(imp[~on_plane]) + 1e-12
+    assert hm.values[c] < hm.sigma_before
