@@ -199,7 +199,7 @@ def branch_and_bound(D, n, landmarks, r0, t0, deadline):
     while stack:
         A, TA, U, R, C1, d2A, dist2A = stack.pop()
         nodes += 1
-        if deadline is not None and nodes % 64 == 0 and time.perf_counter() > deadline:
+        if deadline is not None and nodes % 16 == 1 and time.perf_counter() > deadline:
             return best_r, best_t, False, nodes
         s = best_r
         k = U.size
