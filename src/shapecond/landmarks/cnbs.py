@@ -25,8 +25,9 @@ heat map is a lower bound per candidate, assembled as in DESIGN.md 3:
    re-solved them with a fresh multistart search; here a fresh ``witness_search``
    costs 8-18 s at N = 400 on the shared machine (its spectral and Gilmore-Lawler
    starts do not depend on p but are recomputed), so the default re-solve is an
-   iterated local search instead: ``N_KICKS`` random kicks of the candidate's best
-   map and of the repaired base maps, each polished (``resolve="ils"``);
+   iterated local search instead: ``N_KICKS`` random kicks (random swaps of free
+   samples, applied by rank-1 updates) of the repaired base maps, each polished
+   (``resolve="ils"``);
    ``resolve="full"`` gives the prototype's behaviour.  Whether the argmin agrees
    with full re-solves of every candidate is checked in tests (small N) and in
    ``benchmarks/bench_landmarks.py``.
@@ -166,7 +167,7 @@ class WarmPolisher:
     the dense-target neighbour lists) and ``_Pool``.
     """
 
-    def __init__(self, D, n, maps):
+    def __init__(self, D, n, maps, landmarks=()):
         from ..symmetry import _kernels as K
         from ..symmetry import objective as obj
 
@@ -180,36 +181,69 @@ class WarmPolisher:
         else:
             stage = self.search._Stage(self.D, n, allfree, 0)
         self.knn, self.floor = stage.knn, stage.floor
-        self.base = []
+        # polish every base map once in the full space (maps from the bijection stage
+        # of the search may not be local optima over dense targets yet), so that the
+        # per-candidate searches start one move away from a local optimum
+        lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
+        free = np.setdiff1d(allfree, lm)
+        self.base, seen = [], set()
         for t in maps:
-            t = np.asarray(t, dtype=np.int64).copy()
+            t = self.search.S.repair(np.asarray(t, dtype=np.int64), n, m, lm)
             G = self.D[:n, :n] @ self.D[t, :]
             H = np.sum(self.D[t, :] ** 2, axis=0)
-            self.base.append((t, G, H, obj.d2(self.D, t), obj.dist2(self.D, t)))
+            used = np.zeros(m, dtype=bool)
+            used[t] = True
+            d2v, dist2v, _ = K.local_search(self.D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0,
+                                            obj.d2(self.D, t), obj.dist2(self.D, t), self.floor, 50 * n)
+            key = t.tobytes()
+            if key not in seen:
+                seen.add(key)
+                self.base.append((t, G, H, d2v, dist2v))
 
-    def __call__(self, landmarks, p, extra_starts=()):
-        """Best local optimum from the base maps repaired to fix ``p`` (and any extra starts)."""
+    def _repaired(self, b, p):
+        """Copy of base state ``b`` with one move making T(p) = p (G, H kept exact)."""
+        K, obj, D, n = self.K, self.obj, self.D, self.n
+        t0, G0, H0, d2v, dist2v = self.base[b]
+        t, G, H = t0.copy(), G0.copy(), H0.copy()
+        used = np.zeros(D.shape[0], dtype=bool)
+        used[t] = True
+        if t[p] != p:
+            pre = np.flatnonzero(t == p)
+            if pre.size:
+                q = int(pre[0])
+                dd, dD = obj.swap_delta(D, t, G, p, q)
+                K.apply_swap(D, n, t, G, p, q)
+            else:
+                dd, dD = obj.reassign_delta(D, t, G, H, p, p)
+                K.apply_reassign(D, n, t, G, H, used, p, p)
+            d2v, dist2v = d2v + dd, dist2v + dD
+        return t, G, H, used, d2v, dist2v
+
+    def __call__(self, landmarks, p, extra_starts=(), rng=None, n_kicks=0):
+        """Best local optimum from the base maps repaired to fix ``p``.
+
+        Also from ``extra_starts`` (full G product each) and, with ``rng``, from
+        ``n_kicks`` kicked copies of the repaired base maps (random swaps of free
+        samples applied by rank-1 updates: the iterated-local-search re-solve).
+        """
         K, obj, D, n = self.K, self.obj, self.D, self.n
         m = D.shape[0]
         lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
         free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
         pool = self.search._Pool(D, n)
-        for t0, G0, H0, d2v, dist2v in self.base:
-            t, G, H = t0.copy(), G0.copy(), H0.copy()
-            used = np.zeros(m, dtype=bool)
-            used[t] = True
-            if t[p] != p:
-                pre = np.flatnonzero(t == p)
-                if pre.size:
-                    q = int(pre[0])
-                    dd, dD = obj.swap_delta(D, t, G, p, q)
-                    K.apply_swap(D, n, t, G, p, q)
-                else:
-                    dd, dD = obj.reassign_delta(D, t, G, H, p, p)
-                    K.apply_reassign(D, n, t, G, H, used, p, p)
-                d2v, dist2v = d2v + dd, dist2v + dD
+        jobs = [(b, 0) for b in range(len(self.base))]
+        if rng is not None and self.base:
+            hi = max(3, free.size // 8)
+            jobs += [(k % len(self.base), int(rng.integers(2, hi + 1))) for k in range(n_kicks)]
+        for b, size in jobs:
+            t, G, H, used, d2v, dist2v = self._repaired(b, p)
             if np.any(t[lm] != lm):
                 continue  # a base map that moves a landmark (cannot happen for true warm maps)
+            for _ in range(size - 1):
+                a, c = rng.choice(free, size=2, replace=False)
+                dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
+                K.apply_swap(D, n, t, G, int(a), int(c))
+                d2v, dist2v = d2v + dd, dist2v + dD
             K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, d2v, dist2v,
                            self.floor, 50 * n)
             pool.add(t)
@@ -251,8 +285,8 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     base : SearchResult of ``witness_search`` with ``landmarks`` fixed (computed when None).
     effort : effort of the base search and of the full re-solves (warm starts are polished only).
     resolve_fraction : share of candidates (moved farthest) re-solved; 1.0 re-solves all.
-    resolve : "ils" (default: ``n_kicks`` random kicks of the candidate's best map and of
-        the repaired base maps, each polished) or "full" (a fresh ``witness_search``
+    resolve : "ils" (default: ``n_kicks`` random kicks of the repaired base maps, each
+        polished) or "full" (a fresh ``witness_search``
         with ``effort``, seconds per candidate at N = 400).
     progress : callable(done, total) or None.
     """
@@ -281,7 +315,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     floor = best_swap_avoiding(swap_scores(D, n), L, cand)
     results = {}
     best_t = maps[0]
-    polish = WarmPolisher(D, n, maps)
+    polish = WarmPolisher(D, n, maps, L)
     total = cand.size
     for k, p in enumerate(cand):
         p = int(p)
@@ -306,14 +340,8 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
             continue  # fixed by every witness map: the bound sigma0 is attained already
         if resolve == "full":
             r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort)
-        else:  # "ils": kicks of the candidate's best map and of the base maps, polished
-            free = np.setdiff1d(np.arange(n), L + [p])
-            hi = max(3, free.size // 8)
-            seeds = [results[p].witness] if p in results else []
-            seeds += [repair_fixing(t, p) for t in maps]
-            starts = [search._kick(rng, seeds[i % len(seeds)], free, int(rng.integers(2, hi + 1)))
-                      for i in range(n_kicks)]
-            r = polish(L + [p], p, extra_starts=starts)
+        else:  # "ils": kicked copies of the repaired base maps, polished
+            r = polish(L + [p], p, rng=rng, n_kicks=n_kicks)
         resolved[p] = True
         if r is not None and (float(r.sigma) > values[p] or p not in results):
             values[p] = float(r.sigma)
@@ -370,7 +398,7 @@ def _swap_witness(D, n, L, base):
     a, b = divmod(int(np.argmax(S)), n)
     t = np.arange(n, dtype=np.int64)
     t[a], t[b] = b, a
-    return WarmPolisher(D, n, _maps_of(base, N_MAPS))(L, L[-1], extra_starts=[t])
+    return WarmPolisher(D, n, _maps_of(base, N_MAPS), L[:-1])(L, L[-1], extra_starts=[t])
 
 
 def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
