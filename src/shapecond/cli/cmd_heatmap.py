@@ -1,0 +1,68 @@
+"""``shapecond heatmap INPUT --png FILE``: the CNBS heat map (paper Figures 1 and 4)."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import click
+import numpy as np
+
+from ..landmarks.cnbs import RESOLVE_FRACTION, heat_map
+from .cmd_landmarks import guess_up
+from .common import (build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
+                     pop_shape_options, shape_options)
+
+
+@click.command("heatmap")
+@click.argument("input_spec", metavar="INPUT")
+@shape_options
+@click.option("--landmarks", default=None, help="Vertex ids already fixed (comma-separated, or a file).")
+@click.option("--png", type=click.Path(dir_okay=False), required=True, help="Picture of the heat map (PNG).")
+@click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh coloured by the heat map (PLY).")
+@click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
+              show_default=True, help="Effort of the witness searches.")
+@click.option("--resolve-fraction", type=float, default=RESOLVE_FRACTION, show_default=True,
+              help="Share of candidates (those the witness maps move farthest) searched again.")
+@click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
+@json_option
+def command(input_spec, landmarks, png, ply, effort, resolve_fraction, up, as_json, **kwargs):
+    """The symmetry score with each sample fixed as a landmark, drawn on the shape.
+
+    Low values (blue) are good landmarks: fixing them breaks the near-symmetries.
+    Samples a witness map already fixes (e.g. on a mirror plane) do not lower it.
+    """
+    from ..viz.heatmap import render_heatmap_png
+
+    t0 = time.perf_counter()
+    shape_kw = pop_shape_options(kwargs)
+    ids = parse_ids(landmarks)
+    loaded = load_geometry_or_matrix(input_spec, shape_kw.get("largest_component", False),
+                                     shape_kw.get("symmetry_map"))
+    shape = build_shape(input_spec, landmarks=ids, loaded=loaded, **shape_kw)
+    L = list(range(len(ids)))  # build_shape puts the landmarks first
+    hm = heat_map(shape.D, shape.n_samples, landmarks=L, seed=shape_kw.get("seed", 0), effort=effort,
+                  resolve_fraction=resolve_fraction)
+    best = hm.argmin()
+    vals = hm.values.copy()
+    vals[L] = hm.sigma_before if math.isfinite(hm.sigma_before) else np.nan
+    plot_vals = np.where(np.isnan(vals), np.nanmax(np.where(np.isfinite(vals), vals, np.nan)), vals)
+    title = (f"sigma with each point fixed (before: {fmt(hm.sigma_before)}; "
+             f"best: {fmt(float(hm.values[best]))} at vertex {int(shape.sample_ids[best])})")
+    render_heatmap_png(shape, plot_vals, png, landmarks=L, up=guess_up(input_spec, up), title=title, ply=ply,
+                       cmap="turbo")
+    info(f"wrote {png}" + (f" and {ply}" if ply else ""))
+    out = {
+        "landmarks": [int(v) for v in shape.sample_ids[L]],
+        "sigma_before": hm.sigma_before,
+        "samples": shape.sample_ids,
+        "values": [None if np.isnan(v) else float(v) for v in hm.values],
+        "best": int(shape.sample_ids[best]),
+        "best_value": float(hm.values[best]),
+        "seconds": time.perf_counter() - t0,
+    }
+    if as_json:
+        emit_json(out)
+    else:
+        click.echo(f"sigma before: {fmt(hm.sigma_before)}; best landmark: vertex {out['best']} "
+                   f"(sigma {fmt(out['best_value'])}); {out['seconds']:.1f} s")

@@ -1,0 +1,88 @@
+"""``shapecond landmarks INPUT -k K --method ...``: where to put landmarks (paper Sections 6-7)."""
+
+from __future__ import annotations
+
+import click
+
+from ..landmarks import METHODS, select_landmarks
+from .common import (build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
+                     pop_shape_options, progress_enabled, shape_options)
+
+
+def guess_up(spec: str, up):
+    """Vertical axis for pictures: --up, else y for the generated animal, else z (TOSCA)."""
+    if up:
+        return up
+    return "y" if str(spec).startswith("demo:animal") else "z"
+
+
+def draw_landmarks(shape, result, png, ply, up, title):
+    """Landmark pictures (Figure 6 colours) as PNG and/or PLY; matrices are drawn by MDS."""
+    from ..viz.ply import write_ply
+    from ..viz.render import render_png
+    from ..viz.witness import classical_mds
+
+    if shape.geometry is not None:
+        V, F, verts = shape.geometry.vertices, shape.geometry.faces, list(result.vertices)
+    else:
+        V, F, verts = classical_mds(shape.D), None, list(result.sample_indices)
+    if png:
+        render_png(png, V, F, None, verts, up=up, title=title,
+                   point_size=6.0 if F is not None or len(V) > 2000 else 30.0)
+        info(f"wrote {png}")
+    if ply:
+        write_ply(ply, V, F, None, verts)
+        info(f"wrote {ply}")
+
+
+@click.command("landmarks")
+@click.argument("input_spec", metavar="INPUT")
+@shape_options
+@click.option("-k", "k", type=int, required=True, help="Number of landmarks (method user: 0 = all given).")
+@click.option("--method", type=click.Choice(METHODS), default="cnbs", show_default=True,
+              help="cnbs: condition number based sampling; fps; pls (Tevs et al., reimplemented); "
+                   "hks (heat kernel signature extrema); user (--user-landmarks); cnbs-local.")
+@click.option("--user-landmarks", default=None, help="For --method user: vertex ids (comma-separated) or a file.")
+@click.option("--scores/--no-scores", default=None,
+              help="Compute the symmetry score after each landmark (always on for cnbs; for the "
+                   "baselines it costs one witness search per landmark).")
+@click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
+              show_default=True, help="Effort of the witness searches.")
+@click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the landmarks (PNG).")
+@click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh with landmarks painted (PLY).")
+@click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
+@json_option
+def command(input_spec, k, method, user_landmarks, scores, effort, png, ply, up, as_json, **kwargs):
+    """Choose K landmarks and report the symmetry score after each one.
+
+    Landmarks are vertex ids of INPUT (rows for a distance matrix), in order; scores
+    are the global symmetry score (lower bound with witness) with the first 1, 2, ...
+    landmarks fixed: the paper's "vector of symmetry scores".
+    """
+    shape_kw = pop_shape_options(kwargs)
+    user_ids = parse_ids(user_landmarks) if user_landmarks else []
+    if method == "user" and not user_ids:
+        raise click.UsageError("--method user needs --user-landmarks")
+    loaded = load_geometry_or_matrix(input_spec, shape_kw.get("largest_component", False),
+                                     shape_kw.get("symmetry_map"))
+    shape = build_shape(input_spec, landmarks=user_ids, loaded=loaded, **shape_kw)
+    seed = shape_kw.get("seed", 0)
+    kw = {}
+    if method == "user":
+        kw["ids"] = user_ids
+    if method == "cnbs" and progress_enabled():
+        kw["progress"] = lambda step, done, total: click.echo(
+            f"\rlandmark {step + 1}/{k}: heat map {done}/{total}", err=True, nl=done == total)
+    result = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **kw)
+    title = f"{method}: " + ", ".join(f"{v}" for v in result.landmarks)
+    if png or ply:
+        draw_landmarks(shape, result, png, ply, guess_up(input_spec, up), title)
+    d = result.to_dict()
+    if as_json:
+        emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds")})
+    else:
+        if result.initial_score is not None:
+            click.echo(f"sigma without landmarks: {fmt(result.initial_score)}")
+        for i, (v, s) in enumerate(zip(result.landmarks, result.scores), 1):
+            click.echo(f"{i:3d}  vertex {v:>8d}  sigma after: {fmt(s)}")
+        click.echo(f"{method}, {shape.n_samples} samples, {result.seconds:.2f} s")
