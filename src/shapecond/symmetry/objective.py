@@ -32,11 +32,14 @@ import math
 import numpy as np
 
 #: A map whose distortion is below this fraction of the shape's own size is an
-#: isometry up to round-off: ``sqrt(Dist²(T)) <= ISOMETRY_RTOL * ‖D_XX‖_F`` gives
-#: σ = ∞.  Distances carry a relative error of about 1e-16; summed over N² pairs
-#: the distortion of an exact symmetry stays below 1e-13 · ‖D_XX‖_F, while a
-#: shape whose asymmetry is 1e-8 of its diameter is still reported finite.
-ISOMETRY_RTOL = 1e-10
+#: isometry: ``sqrt(Dist²(T)) <= ISOMETRY_RTOL * ‖D_XX‖_F`` gives σ = ∞.
+#: Round-off alone stays below 1e-13, but meshes are stored with 6-7 significant
+#: digits (float32, ASCII OFF), so the distances of an exactly symmetric mesh carry
+#: relative errors of about 1e-7: the mirror map of TOSCA's cat0 (a mirror-
+#: symmetric triangulation) distorts its geodesic matrix by 2e-8.  An asymmetry
+#: below one part in a million is below what such data can show, so it counts as
+#: an isometry; anything larger is reported as a finite score.
+ISOMETRY_RTOL = 1e-6
 
 
 def _as_map(D: np.ndarray, t) -> np.ndarray:
