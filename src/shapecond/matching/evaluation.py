@@ -87,7 +87,7 @@ def symmetry_score(D, n_samples, landmarks, seed=0, quick=False) -> float:
     """σ with the given sample indices fixed (Eq. 5): the project's score, lower bound.
 
     ``shapecond.symmetry.score.symmetry_score`` when present, else the witness
-    search's lower bound.
+    search's lower bound (``effort="quick"``, at most 10 s, with ``quick``).
     """
     try:
         from shapecond.symmetry.score import symmetry_score as score
@@ -105,6 +105,13 @@ def symmetry_score(D, n_samples, landmarks, seed=0, quick=False) -> float:
                          effort="quick" if quick else "default",
                          time_limit=10 if quick else 60)
     return float(res.sigma)
+
+
+def swap_floor(D, n_samples, landmarks) -> float:
+    """σ of the best single swap avoiding the landmarks (DESIGN.md 1, "Floor")."""
+    from shapecond.symmetry.search import best_single_swap
+
+    return float(best_single_swap(D, n_samples, list(landmarks))[0])
 
 
 # --- class folders -----------------------------------------------------------------
@@ -280,7 +287,13 @@ def prepare_task(path, n_points, seed, backend, cache, with_metric=False):
 
 
 def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, quick):
-    """Landmarks of one method on the null shape and the score after 1, 3 and k of them."""
+    """Landmarks of one method on the null shape and the score after 1, 3 and k of them.
+
+    Scores: the method's own when it reports them (CNBS: the heat-map values it
+    selected by), otherwise ``symmetry_score`` (quick witness search: the
+    baselines' scores cost 3 searches per class and method).  ``floor``: the
+    best single swap with the same landmarks, to show when a score is only that.
+    """
     from shapecond.shapes.io import load_geometry
     from shapecond.shapes.metric import metric_shape
 
@@ -290,13 +303,15 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
     idx = [int(i) for i in sel["sample_indices"]][:k]
     seconds = time.perf_counter() - t0
     given = list(sel["scores"] or [])
-    scores = {}
+    scores, floor = {}, {}
     for c in sorted({1, min(3, len(idx)), len(idx)}):
         s = given[c - 1] if len(given) >= c and given[c - 1] is not None else None
         scores[c] = float(s) if s is not None else symmetry_score(shape.D, shape.n_samples, idx[:c],
-                                                                  seed, quick)
+                                                                  seed, True)
+        floor[c] = swap_floor(shape.D, shape.n_samples, idx[:c])
     return dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
-                ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, seconds=seconds)
+                ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, floor=floor,
+                seconds=seconds, score_source="method" if given and given[0] is not None else "search")
 
 
 @dataclass

@@ -34,25 +34,49 @@ def mean_errors(records, key="error"):
     return {k: float(np.mean(v)) for k, v in acc.items()}
 
 
-def score_table(landmarks):
-    """{(cls, method): {count: score}}."""
-    return {(d["cls"], d["method"]): {int(c): s for c, s in d["scores"].items()} for d in landmarks}
+def score_table(landmarks, key="scores"):
+    """{(cls, method): {count: score}} (``key="floor"``: the best-single-swap floor)."""
+    return {(d["cls"], d["method"]): {int(c): s for c, s in d.get(key, {}).items()}
+            for d in landmarks}
+
+
+def _cells(ev, matcher, cls=None):
+    scores = score_table(ev.landmarks)
+    xs, ys = [], []
+    for (c_, method, c, m), e in mean_errors(ev.records).items():
+        s = scores.get((c_, method), {}).get(c)
+        if m == matcher and s is not None and (cls is None or c_ == cls):
+            xs.append(1e12 if math.isinf(s) else s)
+            ys.append(e)
+    return xs, ys
 
 
 def correlation(ev, matcher):
-    """Spearman ρ (and p) between score and mean error over (class, method, count) cells."""
-    scores = score_table(ev.landmarks)
-    errs = mean_errors(ev.records)
-    xs, ys = [], []
-    for (cls, method, c, m), e in errs.items():
-        s = scores.get((cls, method), {}).get(c)
-        if m == matcher and s is not None:
-            xs.append(1e12 if math.isinf(s) else s)
-            ys.append(e)
-    if len(xs) < 3:
+    """Spearman ρ (and p) between score and mean error over (class, method, count) cells.
+
+    Pooled over classes, so differences between classes count too (a class
+    with higher scores and higher errors raises ρ); see ``within_class``.
+    """
+    xs, ys = _cells(ev, matcher)
+    if len(xs) < 3 or len(set(xs)) < 2 or len(set(ys)) < 2:
         return math.nan, math.nan, len(xs)
     res = spearmanr(xs, ys)
     return float(res.statistic), float(res.pvalue), len(xs)
+
+
+def within_class(ev, matcher):
+    """Mean over classes of Spearman ρ computed inside each class (NaN-free classes only)."""
+    rhos = []
+    for cls in ev.settings["classes"]:
+        xs, ys = _cells(ev, matcher, cls)
+        if len(xs) >= 3 and len(set(xs)) > 1 and len(set(ys)) > 1:
+            rhos.append(float(spearmanr(xs, ys).statistic))
+    return (float(np.mean(rhos)) if rhos else math.nan), len(rhos)
+
+
+def _at_floor(score, floor):
+    return score is not None and floor is not None and math.isfinite(score) and \
+        abs(score - floor) <= 1e-9 * max(1.0, abs(floor))
 
 
 def _fmt(v, d=3):
@@ -78,15 +102,20 @@ def markdown(ev, plots=()) -> str:
            "geodesic error of the dense map at the target's N samples, in % of half the "
            "target's geodesic diameter (paper) unless stated.", "",
            "Timings (s): " + ", ".join(f"{k} {v:.0f}" for k, v in ev.seconds.items()), ""]
+    floors = score_table(ev.landmarks, "floor")
     out += ["## Symmetry score after 1, 3 and all landmarks (Figure 7a)", "",
+            "σ lower bounds with the landmarks fixed (CNBS: its own selection scores; the other "
+            "methods: a quick witness search). `*` marks a value equal to the best single swap "
+            "avoiding the landmarks (the floor): there the score does not see the landmarks.", "",
             "| class | L | " + " | ".join(f"{m} 1 / 3 / L" for m in methods) + " |",
             "|---|---|" + "---|" * len(methods)]
     for cls in classes:
         L = st["landmark_counts"][cls]
         cells = []
         for m in methods:
-            sc = scores.get((cls, m), {})
-            cells.append(" / ".join(_fmt(sc.get(c)) for c in sorted(sc)))
+            sc, fl = scores.get((cls, m), {}), floors.get((cls, m), {})
+            cells.append(" / ".join(_fmt(sc.get(c)) + ("*" if _at_floor(sc.get(c), fl.get(c)) else "")
+                                    for c in sorted(sc)))
         out.append(f"| {cls} | {L} | " + " | ".join(cells) + " |")
     for matcher in matchers:
         out += ["", f"## Mean error, matcher {matcher} (Figure 7b)", "",
@@ -107,8 +136,10 @@ def markdown(ev, plots=()) -> str:
                 v is not None for v in sc3.values()) else "-"
             out.append(f"| {cls} | " + " | ".join(cells) + f" | {best} | {low} |")
         rho, p, n = correlation(ev, matcher)
+        rw, nw = within_class(ev, matcher)
         out += ["", f"Spearman rank correlation between score and error ({matcher}, {n} "
-                f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}."]
+                f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}; within classes "
+                f"(mean of per-class ρ over {nw} classes): {_fmt(rw)}."]
     out += ["", "## Other error measures", "",
             "| class | method | matcher | L | dense % half diam. | dense / sqrt(area) | sample map % |",
             "|---|---|---|---|---|---|---|"]
@@ -193,7 +224,8 @@ def write_report(ev, out_dir) -> Path:
         Path(tmp).write_text(markdown(ev, plots))
     data = dict(settings=ev.settings, seconds=ev.seconds, landmarks=ev.landmarks,
                 records=[r.to_dict() for r in ev.records],
-                correlation={m: dict(zip(("rho", "p", "n"), correlation(ev, m)))
+                correlation={m: dict(zip(("rho", "p", "n"), correlation(ev, m)),
+                                     within_class=within_class(ev, m)[0])
                              for m in ev.settings["matchers"]})
     with atomic_write(out_dir / "results.json") as tmp:
         Path(tmp).write_text(json.dumps(_plain(data), indent=1, allow_nan=False))

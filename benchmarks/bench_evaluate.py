@@ -1,0 +1,146 @@
+"""The paper's Figure 7 evaluation on TOSCA, timed, beside the paper's claims (issue 7).
+
+Usage:
+    python benchmarks/bench_evaluate.py DATASET_DIR [--jobs 2] [--quick] [--out DIR]
+    python benchmarks/bench_evaluate.py --from DIR     # summarise an earlier run's results.json
+
+Runs ``shapecond.matching.evaluation.evaluate_dataset`` (the same as
+``shapecond evaluate``), writes the full report into --out, and puts a summary
+in benchmarks/RESULTS.md (section ``evaluate``): time, the score after 1/3/all
+landmarks, mean errors at 3 and all landmarks per matcher, Spearman's ρ, and
+for each claim of the paper (Figure 7, issue 7) whether the measurement agrees.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _results import command_line, machine, write_section  # noqa: E402
+
+PAPER_ORDER = ["horse", "victoria", "michael", "david", "dog", "centaur", "cat", "wolf"]
+
+
+def _num(v):
+    return math.inf if v == "inf" else (math.nan if v is None else float(v))
+
+
+def _f(v):
+    v = _num(v)
+    return "inf" if math.isinf(v) else ("-" if math.isnan(v) else f"{v:.3g}")
+
+
+def summarise(data: dict, wall: float | None) -> str:
+    st = data["settings"]
+    classes = [c for c in PAPER_ORDER if c in st["classes"]] + \
+        [c for c in st["classes"] if c not in PAPER_ORDER]
+    methods, matchers = st["methods"], st["matchers"]
+    scores = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d["scores"].items()}
+              for d in data["landmarks"]}
+    errs = {}
+    for r in data["records"]:
+        errs.setdefault((r["cls"], r["method"], r["n_landmarks"], r["matcher"]), []).append(r["error"])
+    err = {k: sum(v) / len(v) for k, v in errs.items()}
+    L = st["landmark_counts"]
+    lines = ["## Figure 7 evaluation on TOSCA (issue 7)", "",
+             f"Machine: {machine()}. Command: `{command_line()}`.", "",
+             f"N = {st['n_points']}, {st['backend']} geodesics, methods {', '.join(methods)}, "
+             f"matchers {', '.join(matchers)}, jobs {st['n_jobs']}"
+             f"{', quick mode' if st['quick'] else ''}. Wall time: "
+             + (f"{wall / 60:.1f} min" if wall else "see the run") + "; phases (s): "
+             + ", ".join(f"{k} {v:.0f}" for k, v in data["seconds"].items()) + ".", "",
+             "Errors: mean geodesic error of the dense map at the target's samples, % of half the "
+             "target's geodesic diameter, averaged over the class's targets.", "",
+             "### Score after 1 / 3 / all landmarks (Figure 7a)", "",
+             "| class | L | " + " | ".join(methods) + " |", "|---|---|" + "---|" * len(methods)]
+    for c in classes:
+        lines.append(f"| {c} | {L[c]} | " + " | ".join(
+            " / ".join(_f(v) for _, v in sorted(scores.get((c, m), {}).items())) for m in methods) + " |")
+    for mt in matchers:
+        lines += ["", f"### Mean error with 3 / all landmarks, {mt} (Figure 7b)", "",
+                  "| class | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
+        for c in classes:
+            k3 = min(3, L[c])
+            lines.append(f"| {c} | " + " | ".join(
+                f"{_f(err.get((c, m, k3, mt)))} / {_f(err.get((c, m, L[c], mt)))}" for m in methods) + " |")
+        cor = data["correlation"].get(mt, {})
+        lines += ["", f"Spearman ρ(score, error), {mt}: {_f(cor.get('rho'))} "
+                  f"(p = {_f(cor.get('p'))}, {cor.get('n')} cells pooled over classes); "
+                  f"mean within-class ρ: {_f(cor.get('within_class'))}."]
+    lines += ["", "### Against the paper", ""] + claims(classes, methods, matchers, scores, err, L, data)
+    return "\n".join(lines)
+
+
+def claims(classes, methods, matchers, scores, err, L, data) -> list[str]:
+    out = []
+    if "cnbs" not in methods or "fps" not in methods:
+        return ["CNBS or FPS missing from this run: the paper's comparisons cannot be checked."]
+    low1 = [c for c in classes if all(scores.get((c, "cnbs"), {}).get(1, math.inf)
+                                      <= scores.get((c, m), {}).get(1, math.inf) for m in methods)]
+    out.append(f"- Paper: after one landmark CNBS has the lowest score on every class. Measured: "
+               f"lowest on {len(low1)} of {len(classes)} ({', '.join(low1) or 'none'}).")
+    for mt in matchers:
+        le = [c for c in classes if err.get((c, "cnbs", min(3, L[c]), mt), math.inf)
+              <= err.get((c, "fps", min(3, L[c]), mt), -math.inf)]
+        need = math.ceil(6 * len(classes) / 8)
+        verdict = "agrees" if len(le) >= need else "disagrees"
+        out.append(f"- Paper: with 3 landmarks CNBS error at or below FPS on at least 6 of 8 classes. "
+                   f"{mt}: {len(le)} of {len(classes)} ({', '.join(le) or 'none'}) — {verdict}.")
+        gaps = []
+        for c in classes:
+            vals = [err.get((c, m, L[c], mt)) for m in methods if err.get((c, m, L[c], mt)) is not None]
+            vals3 = [err.get((c, m, min(3, L[c]), mt)) for m in methods
+                     if err.get((c, m, min(3, L[c]), mt)) is not None]
+            if vals and vals3:
+                gaps.append((max(vals) - min(vals), max(vals3) - min(vals3)))
+        if gaps:
+            a = sum(g[0] for g in gaps) / len(gaps)
+            b = sum(g[1] for g in gaps) / len(gaps)
+            out.append(f"- Paper: with all landmarks the methods come close. {mt}: mean spread "
+                       f"between methods {a:.2f} points with all landmarks vs {b:.2f} with 3 — "
+                       f"{'agrees' if a <= b else 'disagrees'}.")
+        rho = _num(data["correlation"].get(mt, {}).get("rho"))
+        out.append(f"- Paper: score and error positively rank-correlated. {mt}: ρ = {_f(rho)} — "
+                   f"{'agrees' if rho > 0 else 'disagrees'}.")
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("dataset", nargs="?")
+    ap.add_argument("--from", dest="from_dir", default=None)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--classes", default=None)
+    ap.add_argument("--methods", default="fps,pls,hks,cnbs")
+    ap.add_argument("--out", default="evaluation")
+    ap.add_argument("--no-write", action="store_true", help="print only; leave RESULTS.md alone")
+    a = ap.parse_args()
+    wall = None
+    if a.from_dir:
+        out = Path(a.from_dir)
+    else:
+        from shapecond.matching.evaluation import evaluate_dataset
+        from shapecond.matching.report import write_report
+
+        t0 = time.perf_counter()
+        ev = evaluate_dataset(a.dataset, classes=a.classes.split(",") if a.classes else None,
+                              methods=a.methods.split(","), n_jobs=a.jobs, quick=a.quick,
+                              progress=sys.stderr.isatty())
+        wall = time.perf_counter() - t0
+        out = Path(a.out)
+        write_report(ev, out)
+    data = json.loads((out / "results.json").read_text())
+    text = summarise(data, wall or sum(data["seconds"].values()))
+    print(text)
+    if not a.no_write:
+        write_section("evaluate", text)
+
+
+if __name__ == "__main__":
+    main()
