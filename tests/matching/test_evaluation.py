@@ -127,3 +127,13 @@ def test_dask_backend_on_a_local_cluster(dataset):
         ev = evaluate_dataset(dataset, methods=("fps",), matchers=("faq",), n_points=40,
                               scheduler=client)
     assert len(ev.records) == 4
+
+
+@pytest.mark.skipif(importlib.util.find_spec("distributed") is not None,
+                    reason="dask.distributed is installed; the missing-dask message cannot be shown")
+def test_scheduler_without_dask_is_an_input_error(dataset, tmp_path, capsys):
+    with pytest.raises(SystemExit) as ex:
+        main(["evaluate", str(dataset), "--methods", "fps", "--points", "20",
+              "--scheduler", "tcp://127.0.0.1:1", "--out", str(tmp_path / "r")])
+    _, err = capsys.readouterr()
+    assert ex.value.code == 2 and "needs dask" in err
