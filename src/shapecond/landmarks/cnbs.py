@@ -51,6 +51,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..symmetry.objective import ISOMETRY_RTOL
+from .warm import WarmPolisher, _search_module
 
 #: Share of the candidates, those moved farthest by the witness maps, that get a
 #: full re-solve in every heat map (DESIGN.md 3: 20 % kept the argmin at N = 400).
@@ -145,124 +146,6 @@ class HeatMap:
         cand = np.flatnonzero(~np.isnan(self.values))
         order = np.lexsort((cand, -self.moved[cand], self.values[cand]))
         return int(cand[order[0]])
-
-
-def _search_module():
-    from ..symmetry import search
-
-    return search
-
-
-class WarmPolisher:
-    """Local search from repaired warm maps only (step 2 of the module docstring).
-
-    ``witness_search`` always adds its own multistart families (seconds per call at
-    N = 400 even with ``effort="quick"``), far too slow once per candidate.  This
-    runs the search's compiled local search (``_kernels.local_search``) from the base
-    maps repaired by one move.  The products G = D_XX D[T, :] and H of each base map
-    are computed once per heat map; the repair move updates them by the rank-1
-    formulas of ``objective.swap_delta`` / ``reassign_delta`` (O(N·M) instead of the
-    O(N²·M) product), so a candidate costs a copy and a few local moves.  Values are
-    re-scored exactly (``search._Pool``).  Uses the search's private ``_Stage`` (for
-    the dense-target neighbour lists) and ``_Pool``.
-    """
-
-    def __init__(self, D, n, maps, landmarks=()):
-        from ..symmetry import _kernels as K
-        from ..symmetry import objective as obj
-
-        self.K, self.obj, self.search = K, obj, _search_module()
-        self.D = np.ascontiguousarray(np.asarray(D, dtype=np.float64))
-        self.n = n = int(n)
-        m = self.D.shape[0]
-        allfree = np.arange(n, dtype=np.int64)
-        if m > n:
-            stage = self.search._Stage(self.D, n, allfree, self.search.DENSE_K)
-        else:
-            stage = self.search._Stage(self.D, n, allfree, 0)
-        self.knn, self.floor = stage.knn, stage.floor
-        # polish every base map once in the full space (maps from the bijection stage
-        # of the search may not be local optima over dense targets yet), so that the
-        # per-candidate searches start one move away from a local optimum
-        lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
-        free = np.setdiff1d(allfree, lm)
-        self.base, seen = [], set()
-        for t in maps:
-            t = self.search.S.repair(np.asarray(t, dtype=np.int64), n, m, lm)
-            G = self.D[:n, :n] @ self.D[t, :]
-            H = np.sum(self.D[t, :] ** 2, axis=0)
-            used = np.zeros(m, dtype=bool)
-            used[t] = True
-            d2v, dist2v, _ = K.local_search(self.D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0,
-                                            obj.d2(self.D, t), obj.dist2(self.D, t), self.floor, 50 * n)
-            key = t.tobytes()
-            if key not in seen:
-                seen.add(key)
-                self.base.append((t, G, H, d2v, dist2v))
-
-    def _repaired(self, b, p):
-        """Copy of base state ``b`` with one move making T(p) = p (G, H kept exact)."""
-        K, obj, D, n = self.K, self.obj, self.D, self.n
-        t0, G0, H0, d2v, dist2v = self.base[b]
-        t, G, H = t0.copy(), G0.copy(), H0.copy()
-        used = np.zeros(D.shape[0], dtype=bool)
-        used[t] = True
-        if t[p] != p:
-            pre = np.flatnonzero(t == p)
-            if pre.size:
-                q = int(pre[0])
-                dd, dD = obj.swap_delta(D, t, G, p, q)
-                K.apply_swap(D, n, t, G, p, q)
-            else:
-                dd, dD = obj.reassign_delta(D, t, G, H, p, p)
-                K.apply_reassign(D, n, t, G, H, used, p, p)
-            d2v, dist2v = d2v + dd, dist2v + dD
-        return t, G, H, used, d2v, dist2v
-
-    def __call__(self, landmarks, p, extra_starts=(), rng=None, n_kicks=0):
-        """Best local optimum from the base maps repaired to fix ``p``.
-
-        Also from ``extra_starts`` (full G product each) and, with ``rng``, from
-        ``n_kicks`` kicked copies of the repaired base maps (random swaps of free
-        samples applied by rank-1 updates: the iterated-local-search re-solve).
-        """
-        K, obj, D, n = self.K, self.obj, self.D, self.n
-        m = D.shape[0]
-        lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
-        free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
-        pool = self.search._Pool(D, n)
-        jobs = [(b, 0) for b in range(len(self.base))]
-        if rng is not None and self.base:
-            hi = max(3, free.size // 8)
-            jobs += [(k % len(self.base), int(rng.integers(2, hi + 1))) for k in range(n_kicks)]
-        for b, size in jobs:
-            t, G, H, used, d2v, dist2v = self._repaired(b, p)
-            if np.any(t[lm] != lm):
-                continue  # a base map that moves a landmark (cannot happen for true warm maps)
-            for _ in range(size - 1):
-                a, c = rng.choice(free, size=2, replace=False)
-                dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
-                K.apply_swap(D, n, t, G, int(a), int(c))
-                d2v, dist2v = d2v + dd, dist2v + dD
-            K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, d2v, dist2v,
-                           self.floor, 50 * n)
-            pool.add(t)
-        for t in extra_starts:
-            t = self.search.S.repair(t, n, m, lm)
-            G = D[:n, :n] @ D[t, :]
-            H = np.sum(D[t, :] ** 2, axis=0)
-            used = np.zeros(m, dtype=bool)
-            used[t] = True
-            K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, obj.d2(D, t),
-                           obj.dist2(D, t), self.floor, 50 * n)
-            pool.add(t)
-        tops = [it for it in pool.top(self.search.KEEP) if it[0] > 0.0]
-        if not tops:
-            return None
-        sig = [math.inf if it[0] == math.inf else math.sqrt(it[0]) for it in tops]
-        v, t, num, den = tops[0]
-        return self.search.SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den,
-                                        maps=tuple(it[1] for it in tops), sigmas=tuple(sig), seconds=0.0)
 
 
 def _maps_of(res, n_maps):
