@@ -37,12 +37,17 @@ minimum over bijections, sorted against sorted).  Hence, since ``s >= 0``,
     F_s(T) <= const + Σ_u P[u, Tu],   P = W − s (2 C1 + GL),   W[u,y] = D[u,y]²,
 
 and ``T`` restricted to ``U`` is an injective assignment ``U → R``, so the
-linear assignment maximum of ``P`` (``scipy.optimize.linear_sum_assignment``)
+linear assignment maximum of ``P`` (Hungarian method, ``_lap_max``)
 bounds ``F_s`` over every completion.  The LAP solution is itself a complete
 map and is evaluated as a primal candidate at every node.  A child ``T u = y``
 is discarded before it is visited when ``const + P[u, y]`` plus the assignment
 maximum of ``P`` without row ``u`` and column ``y`` is ``<= tol``: the same
 bound restricted to the completions with ``T u = y``.
+
+Implementation: the depth-first search runs in one numba function (``_dfs``)
+with explicit per-depth state (children in best-profit order, the cross term
+``C1`` updated incrementally by ``(D[x,u] − D[y,Tu])²`` when ``u -> Tu`` is
+fixed); it checks the clock every 256 nodes.
 
 Floating point: a node is pruned when its bound is ``<= tol`` with
 ``tol = 1e-12 · N``; a pruned map can beat the result only by a relative
@@ -55,7 +60,7 @@ import math
 import time
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
+from numba import njit, objmode
 
 from . import objective
 
@@ -178,104 +183,271 @@ def branch_and_bound(D, n, landmarks, r0, t0, deadline):
     -------
     (ratio², t, finished, nodes)
     """
+    if r0 == math.inf:
+        return r0, np.asarray(t0).copy(), True, 0
+    D = np.ascontiguousarray(D, dtype=np.float64)
     M = D.shape[0]
-    L = np.asarray(list(landmarks), dtype=np.int64)
-    free = np.setdiff1d(np.arange(n), L)
-    targets = np.setdiff1d(np.arange(M), L)
-    tol = 1e-12 * n
-    best_r, best_t = r0, (None if t0 is None else np.asarray(t0).copy())
-    if best_r == math.inf:
-        return best_r, best_t, True, 0
-    Dx = D[:n, :n]
-    iso2 = (objective.ISOMETRY_RTOL**2) * float(np.sum(Dx**2))
-    W = D[:n, :] ** 2
-    spread = D[:n, :].std(axis=1)
-    spread = spread / (spread.max() + 1e-300)
-    # Root: A = landmarks (fixed to themselves, so their d² and A×A distortion are 0).
-    C1 = _cross(D, free, targets, L, L)
-    # Stack entry: (A, TA, U, R, C1 over U×R, d² of A, Dist² of A×A).
-    stack = [(L, L, free, targets, C1, 0.0, 0.0)]
+    L = np.asarray(sorted(int(v) for v in landmarks), dtype=np.int64)
+    free = np.setdiff1d(np.arange(n), L).astype(np.int64)
+    targets = np.setdiff1d(np.arange(M), L).astype(np.int64)
+    t_init = np.arange(n, dtype=np.int64) if t0 is None else np.asarray(t0, dtype=np.int64).copy()
+    iso2 = (objective.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2))
+    budget = math.inf if deadline is None else deadline - time.perf_counter()
+    r, t, finished, nodes = _dfs(D, n, L, free, targets, float(r0), t_init, iso2, 1e-12 * n, float(budget))
+    if t0 is None and r == 0.0:
+        return 0.0, None, bool(finished), int(nodes)
+    return float(r), t, bool(finished), int(nodes)
+
+
+@njit(cache=True)
+def _clock():
+    with objmode(now="float64"):
+        now = time.perf_counter()
+    return now
+
+
+@njit(cache=True)
+def _lap_max(P, k, m, col_of_row):
+    """Maximum-weight assignment of the k rows of P[:k, :m] (k <= m) to distinct columns.
+
+    Shortest augmenting paths with potentials (the Hungarian method, O(k² m)).
+    Fills ``col_of_row[:k]``; returns the total weight.
+    """
+    INF = 1e300
+    u = np.zeros(k + 1)
+    v = np.zeros(m + 1)
+    p = np.zeros(m + 1, dtype=np.int64)
+    way = np.zeros(m + 1, dtype=np.int64)
+    minv = np.empty(m + 1)
+    used = np.empty(m + 1, dtype=np.bool_)
+    for i in range(1, k + 1):
+        p[0] = i
+        j0 = 0
+        minv[:] = INF
+        used[:] = False
+        while True:
+            used[j0] = True
+            i0 = p[j0]
+            delta = INF
+            j1 = 0
+            for j in range(1, m + 1):
+                if not used[j]:
+                    cur = -P[i0 - 1, j - 1] - u[i0] - v[j]
+                    if cur < minv[j]:
+                        minv[j] = cur
+                        way[j] = j0
+                    if minv[j] < delta:
+                        delta = minv[j]
+                        j1 = j
+            for j in range(m + 1):
+                if used[j]:
+                    u[p[j]] += delta
+                    v[j] -= delta
+                else:
+                    minv[j] -= delta
+            j0 = j1
+            if p[j0] == 0:
+                break
+        while True:
+            j1 = way[j0]
+            p[j0] = p[j1]
+            j0 = j1
+            if j0 == 0:
+                break
+    total = 0.0
+    for j in range(1, m + 1):
+        if p[j] != 0:
+            col_of_row[p[j] - 1] = j - 1
+            total += P[p[j] - 1, j - 1]
+    return total
+
+
+@njit(cache=True)
+def _map_ratio(D, n, t, iso2):
+    num = 0.0
+    for x in range(n):
+        num += D[x, t[x]] ** 2
+    if num <= 0.0:
+        return 0.0
+    den = 0.0
+    for x in range(n):
+        for y in range(n):
+            dd = D[x, y] - D[t[x], t[y]]
+            den += dd * dd
+    if den <= iso2:
+        return np.inf
+    return num / den
+
+
+@njit(cache=True)
+def _profit(D, n, U, k, R, m, C1, s, As, Bs, P):
+    """P = W − s (2 C1 + GL) over U×R (module docstring); fills As, Bs, P."""
+    for a in range(k):
+        for b in range(k):
+            As[a, b] = D[U[a], U[b]]
+        As[a, :k] = np.sort(As[a, :k])
+    for a in range(m):
+        for b in range(m):
+            Bs[a, b] = D[R[a], R[b]]
+        Bs[a, :m] = np.sort(Bs[a, :m])
+    for a in range(k):
+        sa = 0.0
+        for q in range(k):
+            sa += As[a, q] ** 2
+        for b in range(m):
+            sb = 0.0
+            cross = 0.0
+            for q in range(k):
+                sb += Bs[b, q] ** 2
+                cross += As[a, q] * Bs[b, m - k + q]
+            gl = max(sa + sb - 2.0 * cross, 0.0)
+            P[a, b] = D[U[a], R[b]] ** 2 - s * (2.0 * C1[U[a], R[b]] + gl)
+
+
+@njit(cache=True)
+def _dfs(D, n, L, free, targets, best_r, best_t, iso2, tol, budget):
+    M = D.shape[0]
+    nf = free.size
+    start = _clock()
+    spread = np.zeros(n)
+    for x in range(n):
+        spread[x] = np.std(D[x, :])
+    spread /= spread.max() + 1e-300
+    t = -np.ones(n, dtype=np.int64)
+    used_t = np.zeros(M, dtype=np.bool_)
+    for l in L:
+        t[l] = l
+        used_t[l] = True
+    C1 = np.zeros((nf + 1, n, M))
+    for x in range(n):
+        for y in range(M):
+            c = 0.0
+            for l in L:
+                dd = D[x, l] - D[y, l]
+                c += dd * dd
+            C1[0, x, y] = c
+    d2A = np.zeros(nf + 1)
+    dist2A = np.zeros(nf + 1)
+    u_at = np.zeros(nf + 1, dtype=np.int64)
+    kids = np.zeros((nf + 1, M), dtype=np.int64)
+    nkids = np.zeros(nf + 1, dtype=np.int64)
+    pos = np.zeros(nf + 1, dtype=np.int64)
+    U = np.empty(nf, dtype=np.int64)
+    R = np.empty(M, dtype=np.int64)
+    As = np.empty((nf, nf))
+    Bs = np.empty((M, M))
+    P = np.empty((nf, M))
+    Pr = np.empty((nf, M))
+    col = np.empty(M, dtype=np.int64)
+    cand = np.empty(n, dtype=np.int64)
+    alive = np.empty((nf, M), dtype=np.bool_)
+    rowmax = np.empty(nf)
+    order = np.empty(M, dtype=np.int64)
     nodes = 0
-    while stack:
-        A, TA, U, R, C1, d2A, dist2A = stack.pop()
-        nodes += 1
-        if deadline is not None and nodes % 16 == 1 and time.perf_counter() > deadline:
-            return best_r, best_t, False, nodes
-        s = best_r
-        k = U.size
-        As = np.sort(D[U[:, None], U], axis=1)
-        Bs = np.sort(D[R[:, None], R], axis=1)
-        GL = (As * As).sum(1)[:, None] + (Bs[:, :k] ** 2).sum(1)[None, :] - 2.0 * As @ Bs[:, -k:].T
-        np.maximum(GL, 0.0, out=GL)
-        Q = 2.0 * C1 + GL  # lower bound of the Dist² terms touching u -> y
-        Wn = W[U[:, None], R]
-        P = Wn - s * Q
-        rows, cols = linear_sum_assignment(P, maximize=True)
-        # Primal candidate: the LAP completion (may raise s, which only tightens).
-        t = np.empty(n, dtype=np.int64)
-        t[A] = TA
-        t[U[rows]] = R[cols]
-        num = float(W[np.arange(n), t].sum())
-        if num > 0.0:
-            den = float(((Dx - D[t[:, None], t]) ** 2).sum())
-            r = math.inf if den <= iso2 else num / den
-            if r > best_r * (1.0 + 1e-12):
-                best_r, best_t = r, t
-                if r == math.inf:
-                    return best_r, best_t, True, nodes
+    depth = 0
+    enter = True
+    while True:
+        if enter:
+            # ---- evaluate the node just entered ----
+            enter = False
+            nodes += 1
+            nkids[depth] = 0
+            pos[depth] = 0
+            if nodes % 256 == 1 and _clock() - start > budget:
+                return best_r, best_t, False, nodes
+            k = 0
+            for x in free:
+                if t[x] < 0:
+                    U[k] = x
+                    k += 1
+            m = 0
+            for y in targets:
+                if not used_t[y]:
+                    R[m] = y
+                    m += 1
+            if k == 0:
+                r = _map_ratio(D, n, t, iso2)
+                if r > best_r * (1.0 + 1e-12):
+                    best_r = r
+                    best_t = t.copy()
+                    if r == np.inf:
+                        return best_r, best_t, True, nodes
+            else:
                 s = best_r
-                P = Wn - s * Q
-                rows, cols = linear_sum_assignment(P, maximize=True)
-        const = d2A - s * dist2A
-        bound = const + float(P[rows, cols].sum())
-        if bound <= tol:
-            continue
-        # Branching.  est[u, y] = const + Σ_{u' != u} max_y' P[u', y'] + P[u, y]
-        # bounds F_s over completions with T u = y (the row-max relaxation of the
-        # assignment).  Branch on the sample with the fewest surviving children
-        # (first fail), ties broken towards the most distinctive distance row.
-        rowmax = P.max(axis=1)
-        alive = (const + (rowmax.sum() - rowmax)[:, None] + P) > tol
-        i = int(np.argmin(alive.sum(axis=1) - 0.5 * spread[U]))
-        u = U[i]
-        U2 = np.delete(U, i)
-        A2 = np.append(A, u)
-        if k == 1:
-            for j in np.flatnonzero(alive[i]):
-                t = np.empty(n, dtype=np.int64)
-                t[A] = TA
-                t[u] = R[j]
-                num = float(W[np.arange(n), t].sum())
-                if num > 0.0:
-                    den = float(((Dx - D[t[:, None], t]) ** 2).sum())
-                    r = math.inf if den <= iso2 else num / den
-                    if r > best_r * (1.0 + 1e-12):
-                        best_r, best_t = r, t
-                        if r == math.inf:
-                            return best_r, best_t, True, nodes
-            continue
-        Cu = np.delete(C1, i, axis=0)
-        for j in np.argsort(P[i], kind="stable"):  # best profit pushed last, popped first
-            if not alive[i, j]:
-                continue
-            if k > 2:  # the same bound with T u = y forced: an exact LAP on the rest
-                Pr = np.delete(np.delete(P, i, axis=0), j, axis=1)
-                rr, cc = linear_sum_assignment(Pr, maximize=True)
-                if const + P[i, j] + float(Pr[rr, cc].sum()) <= tol:
-                    continue
-            y = R[j]
-            R2 = np.delete(R, j)
-            C2 = np.delete(Cu, j, axis=1) + (D[U2, u][:, None] - D[R2, y][None, :]) ** 2
-            stack.append((A2, np.append(TA, y), U2, R2, C2, d2A + W[u, y], dist2A + 2.0 * C1[i, j]))
+                _profit(D, n, U, k, R, m, C1[depth], s, As, Bs, P)
+                lap = _lap_max(P, k, m, col)
+                cand[:] = t
+                for a in range(k):
+                    cand[U[a]] = R[col[a]]
+                r = _map_ratio(D, n, cand, iso2)
+                if r > best_r * (1.0 + 1e-12):  # primal candidate: the LAP completion
+                    best_r = r
+                    best_t = cand.copy()
+                    if r == np.inf:
+                        return best_r, best_t, True, nodes
+                    s = best_r
+                    _profit(D, n, U, k, R, m, C1[depth], s, As, Bs, P)
+                    lap = _lap_max(P, k, m, col)
+                const = d2A[depth] - s * dist2A[depth]
+                if const + lap > tol:
+                    # Branch: first fail on the row-max estimate, ties to distinctive rows.
+                    total = 0.0
+                    for a in range(k):
+                        rowmax[a] = P[a, :m].max()
+                        total += rowmax[a]
+                    best_i, best_c = 0, np.inf
+                    for a in range(k):
+                        cnt = 0
+                        for b in range(m):
+                            alive[a, b] = const + total - rowmax[a] + P[a, b] > tol
+                            cnt += alive[a, b]
+                        c = cnt - 0.5 * spread[U[a]]
+                        if c < best_c:
+                            best_c, best_i = c, a
+                    u_at[depth] = U[best_i]
+                    order[:m] = np.argsort(-P[best_i, :m])
+                    for q in range(m):
+                        b = order[q]
+                        if not alive[best_i, b]:
+                            continue
+                        if k > 2:  # the same bound with T u = y forced
+                            ra = 0
+                            for a in range(k):
+                                if a == best_i:
+                                    continue
+                                cb = 0
+                                for bb in range(m):
+                                    if bb != b:
+                                        Pr[ra, cb] = P[a, bb]
+                                        cb += 1
+                                ra += 1
+                            if const + P[best_i, b] + _lap_max(Pr, k - 1, m - 1, col) <= tol:
+                                continue
+                        kids[depth, nkids[depth]] = R[b]
+                        nkids[depth] += 1
+        # ---- move: into the next child, or back up ----
+        if pos[depth] < nkids[depth]:
+            u = u_at[depth]
+            y = kids[depth, pos[depth]]
+            pos[depth] += 1
+            if t[u] >= 0:  # undo the previous sibling
+                used_t[t[u]] = False
+            d2A[depth + 1] = d2A[depth] + D[u, y] ** 2
+            dist2A[depth + 1] = dist2A[depth] + 2.0 * C1[depth, u, y]
+            for x in range(n):
+                for z in range(M):
+                    dd = D[x, u] - D[z, y]
+                    C1[depth + 1, x, z] = C1[depth, x, z] + dd * dd
+            t[u] = y
+            used_t[y] = True
+            depth += 1
+            enter = True
+        else:
+            if depth == 0:
+                break
+            depth -= 1
+            if pos[depth] >= nkids[depth]:  # the parent is done too: undo its assignment
+                u = u_at[depth]
+                used_t[t[u]] = False
+                t[u] = -1
     return best_r, best_t, True, nodes
-
-
-def _cross(D, U, R, A, TA):
-    """C1[u, y] = Σ_{a∈A} (D[u,a] − D[y,Ta])², shape (|U|, |R|)."""
-    if A.size == 0:
-        return np.zeros((U.size, R.size))
-    Du = D[U[:, None], A]
-    Dy = D[R[:, None], TA]
-    C1 = (Du * Du).sum(1)[:, None] + (Dy * Dy).sum(1)[None, :] - 2.0 * Du @ Dy.T
-    return np.maximum(C1, 0.0)
-
