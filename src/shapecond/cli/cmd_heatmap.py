@@ -49,7 +49,7 @@ def command(input_spec, landmarks, png, ply, effort, resolve_fraction, up, as_js
     plot_vals = np.where(np.isnan(vals), np.nanmax(np.where(np.isfinite(vals), vals, np.nan)), vals)
     title = (f"sigma with each point fixed (before: {fmt(hm.sigma_before)}; "
              f"best: {fmt(float(hm.values[best]))} at vertex {int(shape.sample_ids[best])})")
-    render_heatmap_png(shape, plot_vals, png, landmarks=L, up=guess_up(input_spec, up), title=title, ply=ply,
+    render_heatmap_png(shape, plot_vals, png, landmarks=L, up=guess_up(shape, up), title=title, ply=ply,
                        cmap="turbo")
     info(f"wrote {png}" + (f" and {ply}" if ply else ""))
     out = {

@@ -9,11 +9,11 @@ from .common import (build_shape, emit_json, fmt, info, json_option, load_geomet
                      pop_shape_options, progress_enabled, shape_options)
 
 
-def guess_up(spec: str, up):
-    """Vertical axis for pictures: --up, else y for the generated animal, else z (TOSCA)."""
-    if up:
-        return up
-    return "y" if str(spec).startswith("demo:animal") else "z"
+def guess_up(shape, up):
+    """Vertical axis for pictures: --up, else ``viz.render.guess_up`` (animal y, TOSCA z)."""
+    from ..viz.render import guess_up as guess
+
+    return up or guess(shape.geometry)
 
 
 def draw_landmarks(shape, result, png, ply, up, title):
@@ -76,7 +76,7 @@ def command(input_spec, k, method, user_landmarks, scores, effort, png, ply, up,
     result = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **kw)
     title = f"{method}: " + ", ".join(f"{v}" for v in result.landmarks)
     if png or ply:
-        draw_landmarks(shape, result, png, ply, guess_up(input_spec, up), title)
+        draw_landmarks(shape, result, png, ply, guess_up(shape, up), title)
     d = result.to_dict()
     if as_json:
         emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds")})

@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from .ply import write_ply
-from .render import DEFAULT_VIEWS, render_png
+from .render import DEFAULT_VIEWS, guess_up, render_png
 from .witness import classical_mds
 
 
@@ -67,7 +67,7 @@ def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -
     return (w * vals[idx]).sum(axis=1) / w.sum(axis=1)
 
 
-def render_heatmap_png(shape, values, path, *, landmarks=(), up: str = "z", views=DEFAULT_VIEWS,
+def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = None, views=DEFAULT_VIEWS,
                        method: str = "smooth", cmap: str = "turbo", title: str | None = None,
                        colorbar_label: str = "σ with the point fixed", ply: str | None = None) -> str:
     """Draw a per-sample heat map on the shape (Figure 1/4 style), optionally also as PLY.
@@ -81,6 +81,8 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), up: str = "z", view
         PNG to write.
     landmarks : sequence of int
         Sample indices already chosen, drawn as markers (first three red, then green).
+    up : {"x", "y", "z"} or None
+        Vertical axis; None guesses it (``render.guess_up``).
     ply : str or None
         Also write a PLY with the interpolated colours there.
     """
@@ -89,6 +91,7 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), up: str = "z", view
     finite = vv[np.isfinite(vv)]
     vmax = float(finite.max()) if finite.size else 1.0
     lm_vertices = [int(pts[int(i)]) for i in landmarks]
+    up = up or guess_up(getattr(shape, "geometry", None))
     out = render_png(path, V, F, np.where(np.isfinite(vv), vv, vmax), lm_vertices, views=views, up=up,
                      cmap=cmap, title=title, colorbar_label=colorbar_label,
                      point_size=6.0 if F is not None or len(V) > 2000 else 30.0)

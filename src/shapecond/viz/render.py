@@ -51,6 +51,11 @@ def _up_frame(up: str, V: np.ndarray | None = None) -> np.ndarray:
     return np.stack([x, y, z])
 
 
+def guess_up(geometry) -> str:
+    """Vertical axis of a shape: ``"y"`` for the generated animal, ``"z"`` otherwise (TOSCA)."""
+    return "y" if getattr(geometry, "name", "") == "animal" else "z"
+
+
 def view_rotation(elev: float, azim: float) -> np.ndarray:
     """Rotation (3, 3) whose rows are screen-right, screen-up and toward-viewer.
 

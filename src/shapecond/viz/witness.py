@@ -21,7 +21,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
-from .render import DEFAULT_VIEWS, render_rows
+from .render import DEFAULT_VIEWS, guess_up, render_rows
 
 
 def classical_mds(D: np.ndarray, dim: int = 3) -> np.ndarray:
@@ -45,7 +45,7 @@ def position_colours(V: np.ndarray) -> np.ndarray:
     return 0.1 + 0.85 * c
 
 
-def render_witness_png(shape, witness, path, *, landmarks=(), up: str = "z",
+def render_witness_png(shape, witness, path, *, landmarks=(), up: str | None = None,
                        views=DEFAULT_VIEWS, max_segments: int = 80, title: str | None = None) -> str:
     """Draw a witness map on its shape (see the module docstring).
 
@@ -60,8 +60,9 @@ def render_witness_png(shape, witness, path, *, landmarks=(), up: str = "z",
         PNG to write.
     landmarks : sequence of int
         Sample indices fixed by the map, drawn as markers.
-    up : {"x", "y", "z"}
-        Vertical axis of the data (TOSCA: z).
+    up : {"x", "y", "z"} or None
+        Vertical axis of the data; None guesses it (``render.guess_up``: TOSCA z,
+        the generated animal y).
     max_segments : int
         Number of the longest moves drawn as segments.
 
@@ -108,4 +109,5 @@ def render_witness_png(shape, witness, path, *, landmarks=(), up: str = "z",
              label=f"witness T ({moved}/{n} samples moved)"),
     ]
     point_size = 6.0 if F is not None or len(V) > 2000 else 30.0
+    up = up or guess_up(geom)
     return render_rows(path, V, F, rows, views=views, up=up, title=title, point_size=point_size)
