@@ -119,21 +119,12 @@ def _rank1(P, PT, c, w):
 
 
 @njit(cache=True)
-def _better(mode, s, num, den, bnum, bden, floor):
-    """Is (num, den) strictly better than the incumbent (bnum, bden)?
-
-    Ratio mode compares num/den > bnum/bden by cross-multiplication (den is
-    floored at ``floor`` > 0, so no division and no sign issue); the identity
-    (num <= 0) is never better.
-    """
-    if mode == MODE_RATIO:
-        if num <= 0.0:
-            return False
-        if den < floor:
-            den = floor
-        return num * bden > bnum * den * (1.0 + 1e-12)
-    cur = bnum - s * bden
-    return num - s * den > cur + 1e-12 * abs(cur)
+def _value(ratio, s, num, den, floor):
+    """Objective of one candidate: num / max(den, floor) (σ², the identity and
+    round-off of it scoring -1), or num − s·den on a rung of the fixed-s ladder."""
+    if ratio:
+        return num / max(den, floor) if num > 0.0 else -1.0
+    return num - s * den
 
 
 @njit(cache=True)
@@ -156,7 +147,9 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
 
     Returns
     -------
-    (d2, dist2, moves) after the search; ``t``, ``G``, ``H``, ``used`` updated.
+    (d2, dist2, moves) after the search; ``t``, ``used`` updated, and ``G``,
+    ``H`` too when k > 0 (without reassignment moves the scan needs only the
+    gathered blocks below, so ``G`` is left stale to save O(n·M) per move).
 
     Notes
     -----
@@ -173,55 +166,68 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
     c = np.empty(n)
     w = np.empty(n)
     moves = 0
+    isfree = np.zeros(n, dtype=np.bool_)
+    for i in range(nf):
+        isfree[free[i]] = True
+    pd = np.empty(n)
+    dd = np.empty(n)
+    buf = np.empty(n)
+    ratio = mode == MODE_RATIO
     while moves < max_moves:
-        bnum = d2
-        bden = dist2 if dist2 > floor else floor
-        if mode == MODE_RATIO and bnum <= 0.0:
-            bnum = 0.0
-            bden = 1.0
+        cur = _value(ratio, s, d2, dist2, floor)
+        best = cur + 1e-12 * abs(cur)
         kind = -1
         ba = -1
         bb = -1
-        bd2 = 0.0
-        bdist = 0.0
+        for x in range(n):
+            pd[x] = P[x, x]
+            dd[x] = Dc[x, x] * Dc[x, x]
         for i in range(nf):
             a = free[i]
             ta = t[a]
-            Gaa = P[a, a]
-            Daa = Dc[a, a]
-            for j in range(i + 1, nf):
-                b = free[j]
-                Dbb = Dc[b, b]
+            b2 = d2 - dd[a]
+            bS = 2.0 * pd[a]
+            # branch-free row of candidate values (vectorises), then its max
+            for b in range(a + 1, n):
                 dab = Dc[a, b]
                 dba = DcT[a, b]
-                nd2 = d2 + dab * dab + dba * dba - Daa * Daa - Dbb * Dbb
-                dS = 2.0 * (P[a, b] - Gaa - P[b, b] + PT[a, b] + 2.0 * D[a, b] * Di[a, b])
-                nds = dist2 - 2.0 * dS
-                if _better(mode, s, nd2, nds, bnum, bden, floor):
-                    bnum = nd2
-                    bden = nds if nds > floor else floor
+                nd2 = b2 + dab * dab + dba * dba - dd[b]
+                nds = dist2 - 4.0 * (P[a, b] + PT[a, b] - pd[b] + 2.0 * D[a, b] * Di[a, b]) + 2.0 * bS
+                v = _value(ratio, s, nd2, nds, floor)
+                buf[b] = v if isfree[b] else -np.inf
+            for b in range(a + 1, n):
+                if buf[b] > best:
+                    best = buf[b]
                     kind = 0
                     ba = a
                     bb = b
-                    bd2 = nd2
-                    bdist = nds
             for q in range(k):
                 y = knn[ta, q]
                 if used[y]:
                     continue
                 day = D[a, y]
-                nd2 = d2 + day * day - Daa * Daa
-                dS = 2.0 * (G[a, y] - Gaa)
+                nd2 = b2 + day * day
+                dS = 2.0 * (G[a, y] - pd[a])
                 dty = D[ta, y]
                 nds = dist2 + 2.0 * (H[y] - dty * dty - H[ta]) - 2.0 * dS
-                if _better(mode, s, nd2, nds, bnum, bden, floor):
-                    bnum = nd2
-                    bden = nds if nds > floor else floor
+                v = _value(ratio, s, nd2, nds, floor)
+                if v > best:
+                    best = v
                     kind = 1
                     ba = a
                     bb = y
-                    bd2 = nd2
-                    bdist = nds
+        if kind == 0:
+            dab = Dc[ba, bb]
+            dba = DcT[ba, bb]
+            bd2 = d2 - dd[ba] + dab * dab + dba * dba - dd[bb]
+            bdist = dist2 - 4.0 * (P[ba, bb] + PT[ba, bb] - pd[ba] - pd[bb]
+                                   + 2.0 * D[ba, bb] * Di[ba, bb])
+        elif kind == 1:
+            ta = t[ba]
+            day = D[ba, bb]
+            bd2 = d2 - dd[ba] + day * day
+            dty = D[ta, bb]
+            bdist = dist2 + 2.0 * (H[bb] - dty * dty - H[ta]) - 4.0 * (G[ba, bb] - pd[ba])
         if kind < 0:
             break
         ta = t[ba]
@@ -229,7 +235,11 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
             tb = t[bb]
             for y in range(M):
                 dv[y] = D[tb, y] - D[ta, y]
-            apply_swap(D, n, t, G, ba, bb)
+            if k > 0:
+                apply_swap(D, n, t, G, ba, bb)
+            else:  # bijections: the scan reads P only, G is not needed
+                t[ba] = tb
+                t[bb] = ta
             for x in range(n):
                 c[x] = D[x, ba] - D[x, bb]
             _swap_cols(P, ba, bb)

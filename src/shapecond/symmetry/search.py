@@ -36,6 +36,12 @@ from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry import starts as S
 
+try:  # multithreaded BLAS on the small products here only costs time (and
+    # thrashes when the cores are shared); the hot loop is single-threaded numba
+    from threadpoolctl import threadpool_limits
+except ImportError:  # pragma: no cover - optional
+    threadpool_limits = None
+
 #: Work per effort level: spectral vectors / sign pairs / starts polished,
 #: Gilmore-Lawler grid size / starts polished, ladder runs, random starts,
 #: ILS kicks, maps refined over dense targets, dense kicks.  ``small``: on
@@ -44,8 +50,8 @@ from shapecond.symmetry import starts as S
 EFFORTS = {
     "quick": dict(vectors=6, pairs=3, spectral=4, gl=6, gl_polish=3, ladder=1,
                   random=2, kicks=10, dense=2, dense_kicks=2, small=5e3),
-    "default": dict(vectors=10, pairs=5, spectral=8, gl=10, gl_polish=5, ladder=2,
-                    random=6, kicks=40, dense=3, dense_kicks=6, small=1e4),
+    "default": dict(vectors=10, pairs=5, spectral=5, gl=8, gl_polish=3, ladder=1,
+                    random=2, kicks=30, dense=3, dense_kicks=4, small=1e4),
     "thorough": dict(vectors=16, pairs=8, spectral=24, gl=16, gl_polish=10, ladder=4,
                      random=24, kicks=200, dense=6, dense_kicks=30, small=2e5),
 }
@@ -225,6 +231,13 @@ def witness_search(D, n_samples=None, landmarks=(), seed=0, starts=(), effort="d
     effort : "quick", "default" or "thorough" (see ``EFFORTS``).
     time_limit : seconds; the search stops between local searches when reached.
     """
+    if threadpool_limits is None:
+        return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit)
+
+
+def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit) -> SearchResult:
     t_start = time.perf_counter()
     if effort not in EFFORTS:
         raise InputError(f"effort must be one of {sorted(EFFORTS)}, got {effort!r}")
@@ -282,7 +295,7 @@ def witness_search(D, n_samples=None, landmarks=(), seed=0, starts=(), effort="d
         for _ in range(max(cfg["random"], extra)):
             run(bij, S.random_start(rng, n, free))
         # 6. iterated local search: kick one of the best maps, polish
-        hi = max(3, free.size // 8)
+        hi = max(3, min(12, free.size // 8))
         for i in range(max(cfg["kicks"], extra)):
             if late():
                 break
