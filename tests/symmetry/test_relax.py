@@ -134,3 +134,9 @@ def test_triangle_inequalities_hold_at_every_map(n, m, landmarks):
         t[free] = rng.permutation(tfree)[: len(free)]
         if not np.all(t == np.arange(n)):
             assert sep(lp_point(D, n, landmarks, t)) is None
+
+
+def test_time_limit_gives_inf_rather_than_an_unproven_value():
+    D = random_instance(np.random.default_rng(0), 12, 2)
+    lp = lp_upper_bound(D, time_limit=1e-3)
+    assert lp.upper == math.inf and lp.status == "time-limit"

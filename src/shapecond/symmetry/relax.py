@@ -231,8 +231,9 @@ def lp_upper_bound(D, n_samples=None, landmarks=(), force=False, time_limit=None
     force : bool
         Build the LP even above ``MAX_LP_POINTS``.
     time_limit : float, optional
-        Seconds for HiGHS (all rounds); when hit the bound is ``inf``
-        (status ``"time-limit"``).
+        Seconds for HiGHS (all rounds).  When hit during the first solve the
+        bound is ``inf`` (status ``"time-limit"``); during a cut round, the
+        previous round's optimum (a valid, slightly looser bound) is returned.
     cuts : bool
         Add violated triangle inequalities (module docstring) in rounds.
 
@@ -275,21 +276,23 @@ def lp_upper_bound(D, n_samples=None, landmarks=(), force=False, time_limit=None
     h.passModel(lp)
     separate = _TriangleSeparator(n, M, L) if cuts else None
     n_cuts = 0
+    value = None  # optimum of the last round solved: an upper bound whatever follows
+    status_text = "optimal"
     while True:
         if time_limit is not None:
             left = float(time_limit) - (time.perf_counter() - t0)
             if left <= 0:
-                return LPResult(math.inf, time.perf_counter() - t0, nvar, "time-limit", A.shape[0], n_cuts)
+                break
             h.setOptionValue("time_limit", left)
         h.run()
         status = h.getModelStatus()
-        ncon = A.shape[0] + n_cuts
         if status in (highspy.HighsModelStatus.kUnbounded, highspy.HighsModelStatus.kUnboundedOrInfeasible):
             return LPResult(math.inf, time.perf_counter() - t0, nvar,
-                            "unbounded (isometry in the relaxation)", ncon, n_cuts)
+                            "unbounded (isometry in the relaxation)", A.shape[0] + n_cuts, n_cuts)
         if status != highspy.HighsModelStatus.kOptimal:
-            name = "time-limit" if status == highspy.HighsModelStatus.kTimeLimit else f"solver: {h.modelStatusToString(status)}"
-            return LPResult(math.inf, time.perf_counter() - t0, nvar, name, ncon, n_cuts)
+            status_text = ("time-limit" if status == highspy.HighsModelStatus.kTimeLimit
+                           else f"solver: {h.modelStatusToString(status)}")
+            break
         value = max(-float(h.getInfo().objective_function_value), 0.0)
         if separate is None or value >= _isometry_ratio(D, n):
             break
@@ -299,10 +302,16 @@ def lp_upper_bound(D, n_samples=None, landmarks=(), force=False, time_limit=None
         h.addRows(rows.shape[0], np.full(rows.shape[0], -highspy.kHighsInf), np.zeros(rows.shape[0]),
                   rows.nnz, rows.indptr.astype(np.int32), rows.indices.astype(np.int32), rows.data)
         n_cuts += rows.shape[0]
+    ncon = A.shape[0] + n_cuts
+    if value is None:  # not even the first round finished
+        return LPResult(math.inf, time.perf_counter() - t0, nvar,
+                        "time-limit" if status_text == "optimal" else status_text, ncon, n_cuts)
+    if status_text != "optimal":
+        status_text = f"optimal before the last cut round ({status_text})"
     seconds = time.perf_counter() - t0
     if value >= _isometry_ratio(D, n):
         return LPResult(math.inf, seconds, nvar, "optimal (ratio at isometry level)", ncon, n_cuts)
-    return LPResult(math.sqrt(value) * (1.0 + SAFETY), seconds, nvar, "optimal", ncon, n_cuts)
+    return LPResult(math.sqrt(value) * (1.0 + SAFETY), seconds, nvar, status_text, ncon, n_cuts)
 
 
 class _TriangleSeparator:
