@@ -50,13 +50,14 @@ def test_probes_obey_theorem_4_1(n, seed, sym, n_land, noise):
     assert p.kinds[0] == "witness" and p.ratios[0] == pytest.approx(sigma, rel=1e-9)
 
 
-def test_witness_blend_gives_sigma_over_lambda_when_the_witness_wins():
+def test_witness_blends_probe_between_sigma_and_two_sigma():
+    """Blends towards the witness give σ/λ ∈ (σ, 2σ) when T_opt is the witness (it is here)."""
     rng = np.random.default_rng(4)
     D = near_symmetric_instance(rng, 6, 2, 0.05)
     p = kappa_probes(D, trials=10, seed=2)
-    for kind, r in zip(p.kinds, p.ratios):
-        if kind == "witness-blend":
-            assert p.sigma * (1 - 1e-9) <= r <= 2 * p.sigma
+    blends = [r for kind, r in zip(p.kinds, p.ratios) if kind == "witness-blend"]
+    assert blends and all(r <= 2 * p.sigma * (1 + 1e-9) for r in blends)
+    assert max(blends) > p.sigma * (1 + 1e-6)
 
 
 def test_probe_of_an_unperturbed_shape_is_undefined():
