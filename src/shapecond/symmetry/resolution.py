@@ -1,0 +1,106 @@
+"""Is the witness an isometry within sampling resolution? (issue 4, item 2)
+
+With dense targets (a set Y of M points containing the N samples X as its
+FPS prefix) the score of an exact symmetry keeps growing as M grows: the
+mirror image of every sample gets a closer target, so Dist² of the witness
+shrinks with the covering radius of Y and σ → ∞.  An asymmetric shape instead
+converges to a finite value.  The report compares the dense score at two
+target counts M_lo < M_hi (M_hi = 2 M_lo) and classifies:
+
+* ``"symmetric"``: σ = ∞ already (an exact isometry among the targets);
+* ``"converged"``: |σ(M_hi) − σ(M_lo)| < ``CONVERGED_RTOL`` · σ(M_lo);
+* ``"symmetric within resolution"``: σ grows by at least ``CONVERGED_RTOL``
+  *and* the witness at M_hi distorts distances by no more than the sampling
+  resolution: its RMS distortion sqrt(Dist²/N²) is at most
+  ``RESOLUTION_FACTOR`` × the covering radius r of Y (an isometry rounded to
+  the nearest target moves each distance by at most 2r; typical errors are
+  below r);
+* ``"undecided"``: anything else (σ grows while the distortion is well above
+  the resolution, or σ falls); reported honestly rather than forced.
+
+Measured on TOSCA (benchmarks/RESULTS.md, section bench_search): the mirror
+witnesses of the exactly symmetric null shapes have RMS distortion about
+0.3-0.6 r, deformed poses several r.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from shapecond.symmetry import objective as obj
+from shapecond.symmetry.search import witness_search
+
+CONVERGED_RTOL = 0.10
+RESOLUTION_FACTOR = 1.0
+
+
+@dataclass(frozen=True)
+class ResolutionReport:
+    """Dense score at two target counts and the resulting flag (see module docstring)."""
+
+    flag: str
+    covering_radius: float | None
+    sigma_lo: float
+    sigma_hi: float
+    n_targets_lo: int
+    n_targets_hi: int
+    relative_change: float
+    distortion_rms: float
+
+    def to_dict(self) -> dict:
+        return {"flag": self.flag, "covering_radius": self.covering_radius, "sigma_lo": self.sigma_lo,
+                "sigma_hi": self.sigma_hi, "n_targets_lo": self.n_targets_lo,
+                "n_targets_hi": self.n_targets_hi, "relative_change": self.relative_change,
+                "distortion_rms": self.distortion_rms}
+
+
+def classify(sigma_lo: float, sigma_hi: float, distortion_rms: float, covering_radius: float | None) -> str:
+    """The flag of the module docstring from the two scores and the witness distortion."""
+    if sigma_lo == math.inf or sigma_hi == math.inf:
+        return "symmetric"
+    change = (sigma_hi - sigma_lo) / sigma_lo if sigma_lo > 0 else math.inf
+    if abs(change) < CONVERGED_RTOL:
+        return "converged"
+    if change >= CONVERGED_RTOL and covering_radius is not None \
+            and distortion_rms <= RESOLUTION_FACTOR * covering_radius:
+        return "symmetric within resolution"
+    return "undecided"
+
+
+def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landmarks=(), seed=0,
+                      effort="default", score_hi=None) -> ResolutionReport:
+    """Compare the dense score over the first M/2 targets with the one over all M.
+
+    Parameters
+    ----------
+    D_hi : (M, M) distances over Y (samples first, FPS order, so its leading
+        (M/2) block is the same construction with half the targets).
+    covering_radius : covering radius of the full Y (units of D_hi).
+    score_hi : an already computed ``SearchResult`` (or ``SymmetryScore``) for D_hi,
+        whose witness is reused (its maps also warm-start the M/2 search).
+    """
+    m = D_hi.shape[0]
+    m_lo = max(n_samples, m // 2)
+    if score_hi is None:
+        score_hi = witness_search(D_hi, n_samples, landmarks, seed=seed, effort=effort)
+    sig_hi = score_hi.sigma if hasattr(score_hi, "sigma") else score_hi.sigma_lower
+    w = score_hi.witness
+    D_lo = D_hi[:m_lo, :m_lo]
+    warm = [t for t in getattr(score_hi, "maps", ()) if t.max() < m_lo]
+    lo = witness_search(D_lo, n_samples, landmarks, seed=seed, effort=effort, starts=warm)
+    sig_lo = lo.sigma
+    if sig_hi < sig_lo:  # a map over Y_lo is a map over Y: the dense score cannot fall
+        sig_hi, w = sig_lo, lo.witness
+    rms = math.sqrt(obj.dist2(D_hi, w)) / n_samples
+    change = (sig_hi - sig_lo) / sig_lo if 0 < sig_lo < math.inf and sig_hi < math.inf else \
+        (0.0 if sig_hi == sig_lo else math.inf)
+    return ResolutionReport(classify(sig_lo, sig_hi, rms, covering_radius), covering_radius, sig_lo, sig_hi,
+                            m_lo, m, change, rms)
+
+
+def resolution_for_shape(shape, landmarks=(), seed=0, effort="default", score=None) -> ResolutionReport | None:
+    """Resolution report of a dense ``MetricShape`` (None for bijections or a matrix input)."""
+    if shape.geometry is None or shape.n_targets <= shape.n_points:
+        return None
+    return resolution_report(shape.D, shape.n_points, shape.covering_radius, landmarks, seed, effort, score)
