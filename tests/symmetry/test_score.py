@@ -1,0 +1,101 @@
+"""Score bracket (σ lower/upper/exact, σ̂, κ bracket of Theorem 4.1) and the animal checks."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from shapecond.symmetry import objective as obj
+from shapecond.symmetry.resolution import classify
+from shapecond.symmetry.score import symmetry_score
+from shapecond.symmetry.search import best_single_swap, witness_search
+
+from .conftest import mixed_instances, near_symmetric_instance, random_instance
+
+
+def test_bracket_contains_exact_and_kappa_follows_theorem_4_1():
+    for k, D in enumerate(mixed_instances(seed=21, count=12, n=7)):
+        sc = symmetry_score(D, exact=False, upper=True, seed=k)
+        ex = symmetry_score(D, exact=True, seed=k)
+        assert ex.sigma_exact is not None and ex.sigma_lower == ex.sigma_upper == ex.sigma_exact
+        assert sc.sigma_lower <= ex.sigma_exact * (1 + 1e-9) <= sc.sigma_upper * (1 + 2e-9)
+        assert sc.kappa_lower == sc.sigma_lower and sc.kappa_upper == 2 * sc.sigma_upper + 1
+        assert math.isclose(sc.sigma_hat_lower, sc.sigma_lower * math.sqrt(7))
+        assert math.isclose(obj.map_score(D, ex.witness), ex.sigma_exact, rel_tol=1e-9)
+
+
+def test_auto_exact_only_for_small_instances_and_lower_above_swap():
+    rng = np.random.default_rng(3)
+    small = symmetry_score(random_instance(rng, 8, 2))
+    assert small.upper_method == "exact"
+    big = symmetry_score(random_instance(rng, 25, 3))
+    assert big.sigma_exact is None and big.sigma_upper == math.inf and big.kappa_upper == math.inf
+    assert big.sigma_lower >= big.swap_floor * (1 - 1e-12)
+
+
+def test_upper_refused_above_lp_limit_gives_inf_and_a_note():
+    sc = symmetry_score(random_instance(np.random.default_rng(4), 30, 2), upper=True)
+    assert sc.sigma_upper == math.inf and sc.upper_method == "none"
+    assert any("upper bound" in n for n in sc.notes)
+
+
+def test_isometry_gives_inf_everywhere_and_valid_json():
+    sc = symmetry_score(near_symmetric_instance(np.random.default_rng(6), 14, 3, 0.0))
+    assert sc.sigma_lower == sc.sigma_upper == sc.sigma_exact == math.inf
+    assert sc.kappa_upper == math.inf and sc.upper_method == "isometry"
+    from shapecond.cli.common import jsonable
+
+    text = json.dumps(jsonable(sc.to_dict()), allow_nan=False)
+    d = json.loads(text)
+    assert d["sigma"]["lower"] == "inf" and d["kappa"]["upper"] == "inf"
+    assert set(d) >= {"n_points", "landmarks", "sigma", "sigma_hat", "kappa", "witness", "seconds"}
+
+
+def test_landmarks_lower_the_score():
+    D = near_symmetric_instance(np.random.default_rng(8), 8, 2, 0.02)
+    free = symmetry_score(D)
+    fixed = symmetry_score(D, landmarks=(0, 3))
+    assert fixed.sigma_exact <= free.sigma_exact * (1 + 1e-12)
+    assert fixed.witness[0] == 0 and fixed.witness[3] == 3
+
+
+@pytest.mark.parametrize("lo, hi, rms, r, flag", [
+    (math.inf, math.inf, 0.0, 0.01, "symmetric"),
+    (1.0, 1.05, 0.05, 0.01, "converged"),
+    (1.0, 1.5, 0.005, 0.01, "symmetric within resolution"),
+    (1.0, 1.5, 0.05, 0.01, "undecided"),
+    (1.0, 0.5, 0.005, 0.01, "undecided"),
+])
+def test_resolution_rule(lo, hi, rms, r, flag):
+    assert classify(lo, hi, rms, r) == flag
+
+
+def _animal_shape(delta, n):
+    from shapecond.shapes.metric import metric_shape
+    from shapecond.shapes.synthetic import animal
+
+    return metric_shape(animal(delta=delta), n_points=n, target="samples")
+
+
+def _mirror_map(shape):
+    """The animal's symmetry restricted to the samples (sampling is symmetry-consistent)."""
+    where = {int(v): i for i, v in enumerate(shape.samples)}
+    return np.array([where[int(shape.geometry.symmetry[v])] for v in shape.samples[: shape.n_points]])
+
+
+@pytest.mark.parametrize("delta", [0.0, 0.02, 0.05])
+def test_animal_n100_mirror_is_the_witness(delta):
+    """Issue 3 done-when: inf at delta = 0 with the mirror as witness; mirror for delta <= 0.05."""
+    shape = _animal_shape(delta, 100)
+    mirror = _mirror_map(shape)
+    res = witness_search(shape.D, seed=0)
+    assert res.sigma >= best_single_swap(shape.D)[0]
+    if delta == 0.0:
+        assert res.sigma == math.inf
+        assert obj.is_isometry(shape.D, obj.dist2(shape.D, res.witness))
+    else:
+        assert math.isfinite(res.sigma)
+    assert np.array_equal(res.witness, mirror)
