@@ -166,3 +166,20 @@ def test_time_limit_returns_a_valid_witness():
 def test_bad_input_raises_input_error(kwargs, message):
     with pytest.raises(InputError, match=message):
         witness_search(**kwargs)
+
+
+def test_n12_n16_lower_over_exact_at_least_0_9_on_90_percent():
+    """Done-when of issue 3 at N = 12 and 16, against branch and bound (exact helper)."""
+    from shapecond.symmetry.exact import exact_sigma
+
+    for n, count in ((12, 20), (16, 10)):
+        ratios = []
+        for k, D in enumerate(mixed_instances(seed=40 + n, count=count, n=n)):
+            ex = exact_sigma(D, time_limit=20)
+            if not ex.finished:
+                continue
+            res = witness_search(D, seed=k)
+            assert res.sigma <= ex.sigma * (1 + 1e-9)
+            ratios.append(1.0 if res.sigma == ex.sigma else res.sigma / ex.sigma)
+        assert len(ratios) >= count - 1
+        assert np.mean(np.array(ratios) >= 0.9) >= 0.9, (n, ratios)
