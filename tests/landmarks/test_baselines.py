@@ -121,3 +121,17 @@ def test_select_landmarks_result(animal_shape):
         select_landmarks(animal_shape, 3, "magic")
     with pytest.raises(InputError):
         select_landmarks(animal_shape, 0, "fps")
+
+
+def test_cnbs_local_on_a_small_mesh():
+    from shapecond.shapes.synthetic import bumpy_blob
+
+    g = bumpy_blob(subdivisions=2)
+    shape = metric_shape(g, n_points=30, target="samples", cache=False)
+    r = select_landmarks(shape, 3, "cnbs-local")
+    assert r.method == "cnbs-local" and len(set(r.vertices)) == 3
+    assert all(b <= a * (1 + 1e-9) for a, b in zip(r.scores, r.scores[1:]))
+    assert r.scores[0] <= r.initial_score * (1 + 1e-9)
+    D = _dist(np.random.default_rng(0).normal(size=(10, 3)))
+    with pytest.raises(InputError):
+        select_landmarks(from_distance_matrix(D), 2, "cnbs-local")

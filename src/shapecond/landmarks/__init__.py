@@ -4,8 +4,9 @@
 ``MetricShape`` and reports them in order with the global symmetry score after each:
 
 * ``"cnbs"``: Condition Number Based Sampling on the global score (``cnbs``);
-* ``"cnbs-local"``: CNBS on the local score of deformation-based matching (needs
-  ``shapecond.deformation``'s heat map; refused with a clear error until it exists);
+* ``"cnbs-local"``: CNBS on the local score of deformation-based matching
+  (``shapecond.deformation.heatmap``; its scores are local scores σ_∞, landmarks are
+  mesh vertices, not necessarily samples);
 * ``"fps"``: farthest point sampling with the paper's seeded start (``fps``);
 * ``"pls"``: Planned Landmark Sampling, reimplemented from Tevs et al. 2011 (``pls``);
 * ``"hks"``: extremal points of the heat kernel signature (``hks``);
@@ -34,12 +35,25 @@ def prefix_scores(shape, sample_indices, fixed=(), seed: int = 0, effort: str = 
     return out
 
 
-def _local_heat_map_available():
-    try:
-        from ..deformation import local as _local  # noqa: F401
-    except ImportError:
-        return None
-    return getattr(_local, "select_local_landmarks", None)
+def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
+    """CNBS on the local score (issue 6 item 2) via ``shapecond.deformation``.
+
+    Landmarks are mesh vertices chosen by ``deformation.heatmap.select_local_landmarks``
+    (greedy on the local score σ_∞ of paper Section 5); the scores reported are local
+    scores, not the global σ.  ``sample_indices`` are the samples standing for them.
+    """
+    from ..deformation.heatmap import select_local_landmarks
+    from ..deformation.local_score import LocalProblem
+
+    g = shape.geometry
+    if g is None or g.faces is None:
+        raise InputError("cnbs-local needs a triangle mesh (the local score deforms a surface)")
+    kw = {key: v for key, v in (("alpha", alpha), ("energy", energy)) if v is not None}
+    problem = LocalProblem(g.vertices, g.faces, **kw)
+    start = [int(shape.samples[i]) for i in fixed]
+    res = select_local_landmarks(problem, k, start=start, **({"refine": refine} if refine is not None else {}))
+    verts = [int(v) for v in res.landmarks]
+    return verts, list(res.scores), float(res.initial)
 
 
 def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scores: bool | None = None,
@@ -57,7 +71,8 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     effort : effort of the witness searches ("quick", "default", "thorough").
     fixed : sample indices fixed before selection (they are not reported again).
     **kw : method options: cnbs (``resolve_fraction``, ``resolve``, ``n_maps``,
-        ``progress``, ``keep_heat_maps``), hks (``time_fraction``, ``n_eigs``),
+        ``progress``, ``keep_heat_maps``), cnbs-local (``alpha``, ``energy``, ``refine``),
+        hks (``time_fraction``, ``n_eigs``),
         user (``ids`` or ``path``).
 
     Returns
@@ -78,14 +93,11 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
         chosen, sc, initial = out["landmarks"], out["scores"], out["initial_score"]
         heat_maps = tuple(out["heat_maps"])
     elif method == "cnbs-local":
-        local = _local_heat_map_available()
-        if local is None:
-            raise InputError("cnbs-local needs the local score's heat map (shapecond.deformation), "
-                             "which is not available in this version")
-        if shape.geometry is None or shape.geometry.faces is None:
-            raise InputError("cnbs-local needs a triangle mesh")
-        verts = local(shape.geometry, k, **kw)
-        chosen = [sample_of_vertex(shape, int(v)) for v in verts]
+        verts, sc, initial = _local_landmarks(shape, k, fixed, **kw)
+        samples = [sample_of_vertex(shape, v) for v in verts]
+        ids = [int(shape.geometry.ids[v]) for v in verts]
+        return LandmarkResult(tuple(ids), tuple(samples), tuple(verts), tuple(float(v) for v in sc), method,
+                              time.perf_counter() - t0, initial)
     elif method == "fps":
         from .fps import fps_landmarks
 
