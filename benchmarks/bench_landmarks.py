@@ -13,6 +13,7 @@ Parts (each cached in benchmarks/out/landmarks_*.json, so they can be run separa
   value is also a valid lower bound and the max of the two is reported.  Pictures for cat0,
   david0, dog0 (heat map of the first step, landmark sets) go to benchmarks/out/.
 * ``timing``: one full heat map at N = 400 and 15 CNBS landmarks on cat0.
+* ``pictures``: re-draw the cat0, david0, dog0 pictures from the saved results.
 
 Usage: ``python benchmarks/bench_landmarks.py [--data ../shared/data] [--parts animal,tosca,timing]``
 """
@@ -137,22 +138,39 @@ def part_tosca(data, classes):
                         sample_ids=[int(shape.sample_ids[i]) for i in chosen["cnbs"]], scores=evals,
                         cnbs_scores=cn["scores"], heat_seconds=[hm.seconds for hm in cn["heat_maps"]],
                         cnbs_seconds=t_cnbs, shape_seconds=t_shape)
+        np.save(OUT / f"{cls}0_heat.npy", hm0.values)
         if cls in PICTURES:
-            pictures(cls, g, shape, chosen, hm0)
+            pictures(cls, g, shape, chosen, hm0.values, hm0.sigma_before)
         _save("tosca", res)
     return res
 
 
-def pictures(cls, g, shape, chosen, hm):
+def part_pictures(data):
+    """Re-draw the pictures from the saved results (heat map recomputed if not saved)."""
+    res = _load("tosca") or {}
+    for cls in PICTURES:
+        if cls not in res:
+            continue
+        g, shape = tosca_shape(data, cls)
+        path = OUT / f"{cls}0_heat.npy"
+        if path.exists():
+            vals = np.load(path)
+        else:
+            vals = heat_map(shape.D, shape.n_samples).values
+            np.save(path, vals)
+        pictures(cls, g, shape, res[cls]["chosen"], vals, res[cls]["initial"])
+
+
+def pictures(cls, g, shape, chosen, values, sigma_before):
     from shapecond.viz.heatmap import render_heatmap_png
     from shapecond.viz.render import render_rows
 
     OUT.mkdir(exist_ok=True)
-    vals = hm.values.copy()
+    vals = np.asarray(values, dtype=float).copy()
     finite = vals[np.isfinite(vals)]
     vals = np.where(np.isnan(vals), finite.max(), vals)
     render_heatmap_png(shape, vals, OUT / f"{cls}0_heatmap.png", title=f"{cls}0: σ with each point fixed "
-                       f"(N = {shape.n_samples}, before: {fmt(hm.sigma_before)})", ply=str(OUT / f"{cls}0_heatmap.ply"))
+                       f"(N = {shape.n_samples}, before: {fmt(sigma_before)})", ply=str(OUT / f"{cls}0_heatmap.ply"))
     rows = [dict(values=None, landmarks=[int(shape.samples[i]) for i in chosen[m]], label=m.upper())
             for m in ("fps", "pls", "cnbs")]
     render_rows(OUT / f"{cls}0_landmarks.png", g.vertices, g.faces, rows, title=f"{cls}0: 3 landmarks")
@@ -246,6 +264,8 @@ def main():
         part_tosca(a.data, a.classes.split(","))
     if "timing" in parts:
         part_timing(a.data)
+    if "pictures" in parts:
+        part_pictures(a.data)
     report()
 
 

@@ -69,7 +69,8 @@ def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -
 
 def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = None, views=DEFAULT_VIEWS,
                        method: str = "smooth", cmap: str = "turbo", title: str | None = None,
-                       colorbar_label: str = "σ with the point fixed", ply: str | None = None) -> str:
+                       colorbar_label: str = "σ with the point fixed", ply: str | None = None,
+                       log: bool | None = None) -> str:
     """Draw a per-sample heat map on the shape (Figure 1/4 style), optionally also as PLY.
 
     Parameters
@@ -85,16 +86,24 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = No
         Vertical axis; None guesses it (``render.guess_up``).
     ply : str or None
         Also write a PLY with the interpolated colours there.
+    log : bool or None
+        Colour by log10 of the values; None: when max/min > 20 (e.g. points near a
+        mirror plane keep huge scores and would flatten the rest of the scale).
+        Infinite values are drawn with the largest finite one.
     """
     V, F, pts = _points(shape)
     vv = interpolate_to_vertices(shape, values, method=method)
     finite = vv[np.isfinite(vv)]
     vmax = float(finite.max()) if finite.size else 1.0
+    vv = np.where(np.isfinite(vv), vv, vmax)
+    if log is None:  # auto: a wide range (one near-symmetry left) would flatten everything else
+        log = finite.size > 0 and finite.min() > 0 and vmax / finite.min() > 20.0
+    shown = np.log10(vv) if log else vv
+    label = f"log10 {colorbar_label}" if log else colorbar_label
     lm_vertices = [int(pts[int(i)]) for i in landmarks]
     up = up or guess_up(getattr(shape, "geometry", None))
-    out = render_png(path, V, F, np.where(np.isfinite(vv), vv, vmax), lm_vertices, views=views, up=up,
-                     cmap=cmap, title=title, colorbar_label=colorbar_label,
-                     point_size=6.0 if F is not None or len(V) > 2000 else 30.0)
+    out = render_png(path, V, F, shown, lm_vertices, views=views, up=up, cmap=cmap, title=title,
+                     colorbar_label=label, point_size=6.0 if F is not None or len(V) > 2000 else 30.0)
     if ply is not None:
-        write_ply(ply, V, F, np.where(np.isfinite(vv), vv, vmax), lm_vertices, cmap=cmap)
+        write_ply(ply, V, F, shown, lm_vertices, cmap=cmap)
     return out
