@@ -110,6 +110,39 @@ def claims(classes, methods, matchers, scores, err, L, data) -> list[str]:
     return out
 
 
+def dense_table(dataset: Path, cls: str = "cat", n_points: int = 400) -> str:
+    """Dense extension methods compared on one pair (null shape -> next shape), FPS landmarks."""
+    from shapecond.matching.evaluation import class_shapes
+    from shapecond.matching.metrics import errors_from_rows, normalise
+    from shapecond.matching.pipeline import match_surfaces
+    from shapecond.matching.sampled import sample_surface
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
+
+    paths = class_shapes(Path(dataset) / cls)
+    src_g, tgt_g = load_geometry(paths[0]), load_geometry(paths[1])
+    src, tgt = sample_surface(src_g, n_points), sample_surface(tgt_g, n_points)
+    shape = metric_shape(src_g, n_points)
+    lm = [int(v) for v in shape.samples[:7]]
+    rows = [f"### Dense extension, {paths[0].stem} -> {paths[1].stem} (FPS landmarks)", "",
+            "| matcher | landmarks | sample map | dense: nearest sample | dense: local distances | seconds |",
+            "|---|---|---|---|---|---|"]
+    for matcher in ("lh05", "faq"):
+        for c in (3, 7):
+            e = {}
+            for dense in ("nearest", "distances"):
+                t0 = time.perf_counter()
+                m = match_surfaces(src, tgt, lm[:c], lm[:c], matcher=matcher, dense=dense)
+                sec = time.perf_counter() - t0
+                e[dense] = normalise(errors_from_rows(tgt.rows, m.vertex_map[tgt.samples]),
+                                     tgt.diameter).mean()
+                e["sample"] = normalise(errors_from_rows(m.target.rows[m.sample_map.t],
+                                                         m.source.samples), tgt.diameter).mean()
+            rows.append(f"| {matcher} | {c} | {e['sample']:.2f} | {e['nearest']:.2f} | "
+                        f"{e['distances']:.2f} | {sec:.1f} |")
+    return "\n".join(rows)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset", nargs="?")
@@ -119,6 +152,8 @@ def main() -> None:
     ap.add_argument("--classes", default=None)
     ap.add_argument("--methods", default="fps,pls,hks,cnbs")
     ap.add_argument("--out", default="evaluation")
+    ap.add_argument("--dense-check", default=None, metavar="DATASET_DIR",
+                    help="also compare the dense extension methods on cat0 -> cat1")
     ap.add_argument("--no-write", action="store_true", help="print only; leave RESULTS.md alone")
     a = ap.parse_args()
     wall = None
@@ -137,6 +172,8 @@ def main() -> None:
         write_report(ev, out)
     data = json.loads((out / "results.json").read_text())
     text = summarise(data, wall or sum(data["seconds"].values()))
+    if a.dense_check:
+        text += "\n\n" + dense_table(Path(a.dense_check))
     print(text)
     if not a.no_write:
         write_section("evaluate", text)

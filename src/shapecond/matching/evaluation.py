@@ -84,27 +84,25 @@ def landmark_method(name: str):
 
 
 def symmetry_score(D, n_samples, landmarks, seed=0, quick=False) -> float:
-    """σ with the given sample indices fixed (Eq. 5): the project's score, lower bound.
+    """σ with the given sample indices fixed (Eq. 5): the lower bound with witness.
 
-    ``shapecond.symmetry.score.symmetry_score`` when present, else the witness
-    search's lower bound (``effort="quick"``, at most 10 s, with ``quick``).
+    ``shapecond.symmetry.score.symmetry_score`` (no exact solve, no LP: at
+    N = 400 only the witness search's lower bound is affordable), with
+    ``effort="quick"`` when ``quick``; the bare witness search if that module
+    is missing.
     """
+    effort = "quick" if quick else "default"
     try:
         from shapecond.symmetry.score import symmetry_score as score
     except ImportError:
         score = None
     if score is not None:
-        res = score(D, n_samples, list(landmarks))
-        for attr in ("lower", "sigma", "value"):
-            if hasattr(res, attr):
-                return float(getattr(res, attr))
-        return float(res[0] if isinstance(res, (tuple, list)) else res)
+        res = score(D, n_samples, list(landmarks), exact=False, upper=False, seed=seed,
+                    effort=effort)
+        return float(res.sigma_lower)
     from shapecond.symmetry.search import witness_search
 
-    res = witness_search(D, n_samples, list(landmarks), seed=seed,
-                         effort="quick" if quick else "default",
-                         time_limit=10 if quick else 60)
-    return float(res.sigma)
+    return float(witness_search(D, n_samples, list(landmarks), seed=seed, effort=effort).sigma)
 
 
 def swap_floor(D, n_samples, landmarks) -> float:
