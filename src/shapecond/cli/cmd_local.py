@@ -1,0 +1,63 @@
+"""``shapecond local INPUT``: local symmetry score sigma_inf for deformation-based matching.
+
+Paper Section 5; ``shapecond.deformation`` (DESIGN.md sections 2.3 and 3).
+"""
+
+from __future__ import annotations
+
+import time
+
+import click
+
+from ..deformation.energy import DEFAULT_ALPHA, ENERGIES
+from ..deformation.heatmap import local_heatmap
+from ..deformation.local_score import ZERO_TOL, LocalProblem, LocalScore
+from ..errors import InputError
+from ..shapes.geometry import Geometry
+from ..shapes.io import load_input
+from .common import emit_json, info, json_option, parse_ids
+
+
+@click.command("local")
+@click.argument("input_spec", metavar="INPUT")
+@click.option("--landmarks", "-l", default=None,
+              help="Vertex ids (the file's own) to fix, e.g. 12,405,877, or a file of ids.")
+@click.option("--alpha", type=float, default=DEFAULT_ALPHA, show_default=True,
+              help="Weight of the stretching term against point-to-plane proximity (unit-area mesh).")
+@click.option("--energy", type=click.Choice(ENERGIES), default="springs", show_default=True,
+              help="Stretching term: edge springs or as-rigid-as-possible.")
+@click.option("--zero-tol", type=float, default=ZERO_TOL, show_default=True,
+              help="Eigenvalues below zero_tol x 2 count as zero modes (score inf).")
+@click.option("--heatmap-png", type=click.Path(dir_okay=False), default=None,
+              help="Also draw the local score with each vertex fixed (modal approximation) to this PNG.")
+@json_option
+def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, as_json):
+    """Local symmetry score sqrt(2 / lambda_min) of the energy Hessian, with its zero modes."""
+    t0 = time.perf_counter()
+    g = load_input(input_spec)
+    if not isinstance(g, Geometry) or not g.is_mesh:
+        raise InputError("the local score needs a triangle mesh (a point cloud or distance matrix has "
+                         "no surface to deform)")
+    fixed = g.to_internal(parse_ids(landmarks))
+    problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
+    result = problem.score(fixed, zero_tol=zero_tol, ids=g.ids)
+    if heatmap_png:
+        from ..viz.render import render_png
+
+        hm = local_heatmap(problem, fixed, zero_tol=zero_tol)
+        render_png(heatmap_png, g.vertices, g.faces, hm.values, landmarks=[int(v) for v in fixed],
+                   title=f"{g.name}: local score with each vertex fixed",
+                   colorbar_label="sigma_inf with the vertex fixed")
+        info(f"wrote {heatmap_png}")
+    result = LocalScore(result.score, result.lambda_min, result.zero_modes, result.n_vertices,
+                        result.landmarks, time.perf_counter() - t0)
+    if as_json:
+        emit_json(result.to_dict())
+        return
+    click.echo(f"local score (sigma_inf)  {result.score:.6g}")
+    click.echo(f"lambda_min               {result.lambda_min:.6g}")
+    click.echo(f"vertices                 {result.n_vertices}")
+    click.echo(f"landmarks                {', '.join(map(str, result.landmarks)) or 'none'}")
+    for name in result.zero_modes:
+        click.echo(f"zero mode                {name}")
+    click.echo(f"seconds                  {result.seconds:.2f}")
