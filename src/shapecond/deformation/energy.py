@@ -113,7 +113,9 @@ def mesh_edges(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     tri_area = 0.5 * np.linalg.norm(cross, axis=1)
     half = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     half.sort(axis=1)
-    edges, inverse = np.unique(half, axis=0, return_inverse=True)
+    n = V.shape[0]
+    keys, inverse = np.unique(half[:, 0] * n + half[:, 1], return_inverse=True)
+    edges = np.column_stack([keys // n, keys % n])
     A_e = np.bincount(inverse.ravel(), weights=np.tile(tri_area / 3.0, 3), minlength=len(edges))
     length2 = np.sum((V[edges[:, 1]] - V[edges[:, 0]]) ** 2, axis=1)
     if np.any(length2 <= 1e-24 * max(float(length2.max()), 1e-300)):
@@ -123,9 +125,10 @@ def mesh_edges(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _block_pairs(rows: np.ndarray, cols: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:
     """Sparse (3n, 3n) matrix from 3x3 ``blocks[k]`` placed at block (rows[k], cols[k])."""
-    r = (3 * rows[:, None, None] + np.arange(3)[None, :, None]).repeat(3, axis=2)
-    c = (3 * cols[:, None, None] + np.arange(3)[None, None, :]).repeat(3, axis=1)
-    return sp.csr_matrix((blocks.ravel(), (r.ravel(), c.ravel())), shape=(3 * n, 3 * n))
+    shape = (len(rows), 3, 3)
+    r = np.broadcast_to(3 * rows[:, None, None] + np.arange(3)[None, :, None], shape).ravel()
+    c = np.broadcast_to(3 * cols[:, None, None] + np.arange(3)[None, None, :], shape).ravel()
+    return sp.csr_matrix((blocks.ravel(), (r, c)), shape=(3 * n, 3 * n))
 
 
 def _cross_matrices(e: np.ndarray) -> np.ndarray:
@@ -210,7 +213,8 @@ def hessian(V: np.ndarray, F: np.ndarray, alpha: float = DEFAULT_ALPHA, energy: 
         raise InputError(f"alpha must be a finite number >= 0, got {alpha}")
     stretch = springs_hessian(V, F) if energy == "springs" else arap_hessian(V, F)
     H = (proximity_hessian(V, F) + alpha * stretch).tocsr()
-    H = 0.5 * (H + H.T)
+    if energy == "arap":  # springs are symmetric by construction; the Schur complement up to rounding
+        H = 0.5 * (H + H.T)
     return H.tocsr()
 
 
