@@ -61,7 +61,10 @@ def test_bad_input_is_one_error_line_exit_2_and_no_file(tmp_path, capsys, argv, 
     assert list(tmp_path.iterdir()) == []
 
 
-def test_demo_json(capsys):
-    code, out, _ = run(capsys, "demo", "--points", "60", "--json")
+def test_demo_json(tmp_path, capsys):
+    code, out, _ = run(capsys, "demo", "--points", "60", "--landmark-points", "30", "--out", str(tmp_path), "--json")
     summary = json.loads(out)
     assert code == 0 and summary["n_points"] == 60 and summary["covering_radius"] > 0
+    assert summary["sigma"]["lower"] == "inf" and summary["witness_is_mirror_map"]
+    assert len(summary["landmarks"]) == 3 and all(isinstance(s, float) for s in summary["scores"])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["heatmap.png", "landmarks.png", "witness.png"]
