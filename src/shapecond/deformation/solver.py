@@ -157,7 +157,7 @@ class ConstrainedProblem:
             x -= self.W @ np.linalg.solve(self.G, x[self.fixed_dofs])
         return x[self.free]
 
-    def eigenpairs(self, k: int, tol: float = 1e-10, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    def eigenpairs(self, k: int, tol: float = 1e-8, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """The ``k`` smallest eigenpairs, ascending; vectors are M-orthonormal, (3n, k) with zeros on fixed dofs."""
         p = self.parent
         n_free = len(self.free)
@@ -168,7 +168,7 @@ class ConstrainedProblem:
         v0 = np.random.default_rng(seed).normal(size=n_free)
         with _one_blas_thread():  # ARPACK's small BLAS calls thrash when threaded (20x measured)
             w, X = sla.eigsh(H_ff, k=k, M=M_ff, sigma=-p.shift, OPinv=op, which="LM", v0=v0,
-                             tol=tol, ncv=min(n_free, max(2 * k + 1, 20)))
+                             tol=tol, ncv=min(n_free, max(2 * k + 1, 30)))
         order = np.argsort(w)
         w, X = w[order], X[:, order]
         full = np.zeros((p.n_dof, len(w)))
