@@ -48,7 +48,10 @@ def summarise(data: dict, wall: float | None) -> str:
     err = {k: sum(v) / len(v) for k, v in errs.items()}
     L = st["landmark_counts"]
     lines = ["## Figure 7 evaluation on TOSCA (issue 7)", "",
-             f"Machine: {machine()}. Command: `{command_line()}`.", "",
+             f"Machine: {machine()}. Command: `{command_line()}`, summarising the run "
+             f"`shapecond evaluate {st['dataset']} --classes {','.join(st['classes'])} "
+             f"--methods {','.join(methods)} --jobs {st['n_jobs']}{' --quick' if st['quick'] else ''}`.",
+             "",
              f"N = {st['n_points']}, {st['backend']} geodesics, methods {', '.join(methods)}, "
              f"matchers {', '.join(matchers)}, jobs {st['n_jobs']}"
              f"{', quick mode' if st['quick'] else ''}. Wall time: "
