@@ -19,6 +19,10 @@ the Courant-Fischer theorem this is an *upper* bound on the exact constrained
 ``lambda_min``: the exact mode can also bend locally around the pinned vertex.
 What matters for choosing landmarks is the *ranking*; the tests compare it
 with exact re-solves on a small mesh (Spearman correlation and the argmax).
+Measured: Spearman 1.00 / 0.96-0.98 (blob, 642 vertices, 0 / 1-2 landmarks),
+0.81 on wolf0 with 3 landmarks (60 random vertices); the modal value is 1-7 %
+above the exact one with up to one landmark, up to ~40 % with two (the exact
+mode bends around the pinned vertices), the ranking survives.
 ``refine`` re-solves exactly (three extra solves with the same factorisation,
 then one eigen-solve each) the best candidates of the approximation, and the
 choice among them is made on the exact values.

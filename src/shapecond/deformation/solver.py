@@ -14,7 +14,10 @@ bumpy blob, springs energy; see benchmarks/RESULTS.md for the current figures):
 * SuperLU without pivoting on a **geometric nested-dissection ordering of the
   vertex graph** (``nested_dissection``; each vertex's three coordinates kept
   together): 0.7 s at 10k, 4.5 s at 41k vertices under load, solves 22 / 49 ms.
-  This is what we use, with ARPACK in shift-invert mode.
+  This is what we use, with ARPACK in shift-invert mode (k = 4, ncv = 30,
+  tol = 1e-8: ~30 solves).  CPU seconds for build + factor + eigen-solve:
+  1.0 s at 10k, 4.7 s at 41k (blob), 6.8 s at 53k (david0), 21 s at 111k
+  vertices (benchmarks/RESULTS.md, section "local").
 
 ``A = H + s M`` (``s = SHIFT``, small, so A is positive definite even with
 zero modes) is factorised once.  Fixing a set S of coordinates is a bordered
