@@ -42,11 +42,11 @@ def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, as_json
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(fixed, zero_tol=zero_tol, ids=g.ids)
     if heatmap_png:
-        from ..viz.render import render_png
+        from ..viz.render import guess_up, render_png
 
         hm = local_heatmap(problem, fixed, zero_tol=zero_tol)
         render_png(heatmap_png, g.vertices, g.faces, hm.values, landmarks=[int(v) for v in fixed],
-                   title=f"{g.name}: local score with each vertex fixed",
+                   up=guess_up(g), title=f"{g.name}: local score with each vertex fixed",
                    colorbar_label="sigma_inf with the vertex fixed")
         info(f"wrote {heatmap_png}")
     result = LocalScore(result.score, result.lambda_min, result.zero_modes, result.n_vertices,

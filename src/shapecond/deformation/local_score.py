@@ -122,7 +122,8 @@ class LocalProblem:
         fixed = np.asarray(list(fixed), dtype=np.int64).ravel()
         if fixed.size and (fixed.min() < 0 or fixed.max() >= self.n_vertices):
             raise InputError(f"landmark index out of range 0..{self.n_vertices - 1}")
-        return np.unique(fixed)
+        _, first = np.unique(fixed, return_index=True)
+        return fixed[np.sort(first)]  # duplicates dropped, the caller's order kept
 
     def spectrum(self, fixed=(), zero_tol: float = ZERO_TOL, k: int = 4, max_k: int = 32):
         """Smallest eigenpairs with ``fixed`` vertices, enough to see every zero mode.
