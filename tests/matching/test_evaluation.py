@@ -137,3 +137,18 @@ def test_scheduler_without_dask_is_an_input_error(dataset, tmp_path, capsys):
               "--scheduler", "tcp://127.0.0.1:1", "--out", str(tmp_path / "r")])
     _, err = capsys.readouterr()
     assert ex.value.code == 2 and "needs dask" in err
+
+
+def test_landmark_selection_is_cached(dataset):
+    from shapecond.matching.evaluation import landmark_task
+
+    args = ("strip", dataset / "strip" / "strip0.off", "fps", 4, 30, 0, "heat", True, True)
+    from shapecond.shapes.metric import cache_dir
+
+    first = landmark_task(*args)
+    cached = list(cache_dir().glob("landmarks-*.json"))
+    assert cached
+    second = landmark_task(*args)
+    assert list(cache_dir().glob("landmarks-*.json")) == cached
+    assert first["ids"] == second["ids"] and first["scores"] == second["scores"]
+    assert set(second["scores"]) == {1, 3, 4}

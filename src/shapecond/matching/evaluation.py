@@ -25,6 +25,7 @@ should share the cache folder ``$SHAPECOND_CACHE``).
 
 from __future__ import annotations
 
+import hashlib
 import math
 import re
 import time
@@ -42,6 +43,8 @@ from shapecond.matching.sampled import CachedSolver, sample_surface
 PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog": 12,
                    "centaur": 7, "cat": 7, "wolf": 5}
 DEFAULT_LANDMARKS = 10
+#: bump when the landmark methods change, to invalidate cached selections
+LANDMARK_CACHE_VERSION = "1"
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 
@@ -287,14 +290,32 @@ def prepare_task(path, n_points, seed, backend, cache, with_metric=False):
 def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, quick):
     """Landmarks of one method on the null shape and the score after 1, 3 and k of them.
 
+    Cached (JSON in the cache folder, keyed by the file, its size and mtime, and
+    every parameter): CNBS at N = 400 takes minutes per class.
+
     Scores: the method's own when it reports them (CNBS: the heat-map values it
     selected by), otherwise ``symmetry_score`` (quick witness search: the
     baselines' scores cost 3 searches per class and method).  ``floor``: the
     best single swap with the same landmarks, to show when a score is only that.
     """
-    from shapecond.shapes.io import load_geometry
-    from shapecond.shapes.metric import metric_shape
+    import json
 
+    from shapecond.shapes.io import atomic_write, load_geometry
+    from shapecond.shapes.metric import cache_dir, metric_shape
+
+    st = Path(null_path).stat()
+    key = hashlib.sha256(repr((LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size,
+                               st.st_mtime_ns, method, k, n_points, seed, backend, quick)
+                              ).encode()).hexdigest()[:32]
+    path = Path(cache_dir()) / f"landmarks-{key}.json"
+    if cache and path.exists():
+        try:
+            d = json.loads(path.read_text())
+            d["scores"] = {int(c): float(v) for c, v in d["scores"].items()}
+            d["floor"] = {int(c): float(v) for c, v in d["floor"].items()}
+            return d
+        except (ValueError, KeyError):
+            path.unlink(missing_ok=True)
     t0 = time.perf_counter()
     shape = metric_shape(load_geometry(null_path), n_points, backend=backend, seed=seed, cache=cache)
     sel = landmark_method(method)(shape, k, seed)
@@ -307,9 +328,18 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
         scores[c] = float(s) if s is not None else symmetry_score(shape.D, shape.n_samples, idx[:c],
                                                                   seed, True)
         floor[c] = swap_floor(shape.D, shape.n_samples, idx[:c])
-    return dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
-                ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, floor=floor,
-                seconds=seconds, score_source="method" if given and given[0] is not None else "search")
+    out = dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
+               ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, floor=floor,
+               seconds=seconds, score_source="method" if given and given[0] is not None else "search")
+    if cache:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_write(path) as tmp:
+                # json writes inf as Infinity, which json.loads reads back
+                Path(tmp).write_text(json.dumps(out))
+        except OSError:
+            pass
+    return out
 
 
 @dataclass
