@@ -62,15 +62,16 @@ def test_landmarks_lower_the_score():
     assert fixed.witness[0] == 0 and fixed.witness[3] == 3
 
 
-@pytest.mark.parametrize("lo, hi, rms, r, flag", [
-    (math.inf, math.inf, 0.0, 0.01, "symmetric"),
-    (1.0, 1.05, 0.05, 0.01, "converged"),
-    (1.0, 1.5, 0.005, 0.01, "symmetric within resolution"),
-    (1.0, 1.5, 0.05, 0.01, "undecided"),
-    (1.0, 0.5, 0.005, 0.01, "undecided"),
+@pytest.mark.parametrize("lo, hi, rms, disp, r, flag", [
+    (math.inf, math.inf, 0.0, 0.1, 0.01, "symmetric"),
+    (1.0, 1.05, 0.05, 0.1, 0.01, "converged"),
+    (1.0, 1.5, 0.005, 0.1, 0.01, "symmetric within resolution"),
+    (1.0, 1.5, 0.005, 0.002, 0.01, "undecided"),  # a local map: moves samples by less than 3 r
+    (1.0, 1.5, 0.05, 0.1, 0.01, "undecided"),
+    (1.0, 0.5, 0.005, 0.1, 0.01, "undecided"),
 ])
-def test_resolution_rule(lo, hi, rms, r, flag):
-    assert classify(lo, hi, rms, r) == flag
+def test_resolution_rule(lo, hi, rms, disp, r, flag):
+    assert classify(lo, hi, rms, r, disp) == flag
 
 
 def _animal_shape(delta, n):
