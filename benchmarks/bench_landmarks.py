@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _results import command_line, machine, peak_rss_mb, write_section  # noqa: E402
+from _results import machine, peak_rss_mb, write_section  # noqa: E402
 
 from shapecond.landmarks.cnbs import cnbs_landmarks, full_heat_map, heat_map  # noqa: E402
 from shapecond.landmarks.fps import fps_landmarks  # noqa: E402
@@ -216,7 +216,9 @@ def part_timing(data, k=15):
 def report():
     lines = ["## Landmark selection: CNBS against full re-solves and the baselines (issue 6)", "",
              f"Machine: {machine()} (shared with other jobs: timings are upper bounds). "
-             f"Command: `{command_line()}`.", ""]
+             "Command: `python benchmarks/bench_landmarks.py --parts animal,tosca,timing,pictures` (parts may be "
+             "run separately; each caches its figures in benchmarks/out/landmarks_*.json and this section is "
+             "rebuilt from all of them).", ""]
     a = _load("animal")
     if a:
         lines += [f"### Generated animal, delta = {a['delta']}, N = {a['n']} (bijection score, "
