@@ -30,8 +30,8 @@ class WarmPolisher:
     are computed once per heat map; the repair move updates them by the rank-1
     formulas of ``objective.swap_delta`` / ``reassign_delta`` (O(N·M) instead of the
     O(N²·M) product), so a candidate costs a copy and a few local moves.  Values are
-    re-scored exactly (``search._Pool``).  Uses the search's private ``_Stage`` (for
-    the dense-target neighbour lists) and ``_Pool``.
+    re-scored exactly (``search.MapPool``).  Uses the search's ``SearchStage`` (for
+    the dense-target neighbour lists) and ``MapPool``.
     """
 
     def __init__(self, D, n, maps, landmarks=()):
@@ -44,9 +44,9 @@ class WarmPolisher:
         m = self.D.shape[0]
         allfree = np.arange(n, dtype=np.int64)
         if m > n:
-            stage = self.search._Stage(self.D, n, allfree, self.search.DENSE_K)
+            stage = self.search.SearchStage(self.D, n, allfree, self.search.DENSE_K)
         else:
-            stage = self.search._Stage(self.D, n, allfree, 0)
+            stage = self.search.SearchStage(self.D, n, allfree, 0)
         self.knn, self.floor = stage.knn, stage.floor
         # polish every base map once in the full space (maps from the bijection stage
         # of the search may not be local optima over dense targets yet), so that the
@@ -135,7 +135,7 @@ class WarmPolisher:
         # rank by the tracked values (rank-1 updates, exact up to round-off); the best
         # two are re-scored exactly, so the reported σ is the exact σ of its witness
         ranked = sorted(found.values(), key=lambda it: -it[0])[: self.search.KEEP]
-        pool = self.search._Pool(D, n)
+        pool = self.search.MapPool(D, n)
         for _, t in ranked[:2]:
             pool.add(t)
         exact = pool.top(2)

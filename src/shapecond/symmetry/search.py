@@ -135,8 +135,12 @@ def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
     return (math.inf if best == np.inf else math.sqrt(max(best, 0.0))), int(free[i]), int(free[j])
 
 
-class _Stage:
-    """One search space: maps of the n samples into the M points of ``D``."""
+class SearchStage:
+    """One search space: maps of the n samples into the M points of ``D``.
+
+    Public so that warm-started searches (``landmarks.warm``, CNBS) can run the
+    compiled local search from their own starts with the same neighbour lists.
+    """
 
     def __init__(self, D, n, free, dense_k):
         self.D, self.n, self.free = D, n, free
@@ -165,7 +169,7 @@ class _Stage:
         return t
 
 
-class _Pool:
+class MapPool:
     """Distinct maps with their exact scores (σ² or inf), best first."""
 
     def __init__(self, D, n):
@@ -194,7 +198,7 @@ class _Pool:
         return max((it[0] for it in self.items.values()), default=0.0)
 
 
-def _kick(rng, t, free, size):
+def kick(rng, t, free, size):
     """Rotate the images of ``size`` random free samples (an ILS perturbation)."""
     t = t.copy()
     idx = rng.choice(free, size=min(size, free.size), replace=False)
@@ -204,7 +208,7 @@ def _kick(rng, t, free, size):
 
 def _dense_kick(rng, t, free, knn, m, size):
     """Kick over dense targets: a rotation plus moves to random free nearby targets."""
-    t = _kick(rng, t, free, size)
+    t = kick(rng, t, free, size)
     used = np.zeros(m, dtype=bool)
     used[t] = True
     for a in rng.choice(free, size=min(size, free.size), replace=False):
@@ -246,13 +250,13 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit) -
     m = D.shape[0]
     rng = np.random.default_rng(seed)
     deadline = math.inf if time_limit is None else t_start + float(time_limit)
-    pool = _Pool(D, n)
+    pool = MapPool(D, n)
 
     def late():
         return time.perf_counter() > deadline or pool.best_value() == math.inf
 
-    bij = _Stage(np.ascontiguousarray(D[:n, :n]), n, free, 0)
-    dense = _Stage(D, n, free, DENSE_K) if m > n else None
+    bij = SearchStage(np.ascontiguousarray(D[:n, :n]), n, free, 0)
+    dense = SearchStage(D, n, free, DENSE_K) if m > n else None
     warm = [S.repair(t, n, m, lm) for t in starts]
     warm_bij = [t for t in warm if t.max() < n]
 
@@ -304,7 +308,7 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit) -
                 break
             tops = pool.top(3)
             base = tops[0][1] if i % 3 else tops[i // 3 % len(tops)][1]
-            run(bij, _kick(rng, base, free, int(rng.integers(2, hi + 1))))
+            run(bij, kick(rng, base, free, int(rng.integers(2, hi + 1))))
     # 7. dense targets: refine the best bijections (and dense warm starts) over Y
     if dense is not None:
         refine = [it[1] for it in pool.top(cfg["dense"])]
