@@ -53,7 +53,6 @@ def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
 def command(points, landmark_points, delta, out, seed, as_json):
     """Score the generated animal, show its witness map, and pick three CNBS landmarks."""
     from ..landmarks import select_landmarks
-    from ..landmarks.cnbs import heat_map
     from ..symmetry.score import symmetry_score
 
     if not 3 <= landmark_points <= points:
@@ -67,8 +66,8 @@ def command(points, landmark_points, delta, out, seed, as_json):
     inverse = {int(v): k for k, v in enumerate(shape.samples)}
     mirror = np.array([inverse.get(int(geometry.symmetry[v]), -1) for v in shape.samples])
     small = metric_shape(geometry, n_points=landmark_points, seed=seed)
-    heat = heat_map(small.D, small.n_samples, seed=seed)
-    chosen = select_landmarks(small, 3, "cnbs", seed=seed)
+    chosen = select_landmarks(small, 3, "cnbs", seed=seed, keep_heat_maps=True)
+    heat = chosen.heat_maps[0]  # sigma with each sample fixed, before any landmark
     pictures = _pictures(out, shape, score, small, heat, chosen)
     summary = {
         "shape": f"demo:animal:delta={delta}",
