@@ -5,14 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from shapecond.cli import main
-
-
-def run(capsys, *argv):
-    with pytest.raises(SystemExit) as exit_info:
-        main(list(argv))
-    out, err = capsys.readouterr()
-    return exit_info.value.code, out, err
+from tests.conftest import run_cli as run
 
 
 def test_info_json_on_generated_shape(capsys):

@@ -4,16 +4,8 @@ import json
 
 import matplotlib.image as mpimg
 import numpy as np
-import pytest
 
-from shapecond.cli import main
-
-
-def run(capsys, *argv):
-    with pytest.raises(SystemExit) as exit_info:
-        main(list(argv))
-    out, err = capsys.readouterr()
-    return exit_info.value.code, out, err
+from tests.conftest import run_cli as run
 
 
 def _matrix(tmp_path, n=12, seed=0):

@@ -5,15 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from shapecond.cli import main
+from tests.conftest import run_cli as run
 from tests.symmetry.conftest import random_instance
-
-
-def run(capsys, *argv):
-    with pytest.raises(SystemExit) as exit_info:
-        main(list(argv))
-    out, err = capsys.readouterr()
-    return exit_info.value.code, out, err
 
 
 def test_kappa_json_on_a_matrix(tmp_path, capsys):
