@@ -83,10 +83,17 @@ def claims(classes, methods, matchers, scores, err, L, data) -> list[str]:
     out = []
     if "cnbs" not in methods or "fps" not in methods:
         return ["CNBS or FPS missing from this run: the paper's comparisons cannot be checked."]
+    tol = 1e-9  # scores equal to round-off are ties
     low1 = [c for c in classes if all(scores.get((c, "cnbs"), {}).get(1, math.inf)
-                                      <= scores.get((c, m), {}).get(1, math.inf) for m in methods)]
+                                      <= scores.get((c, m), {}).get(1, math.inf) * (1 + tol)
+                                      for m in methods)]
+    strict = [c for c in low1 if all(scores.get((c, "cnbs"), {}).get(1, math.inf)
+                                     < scores.get((c, m), {}).get(1, math.inf) * (1 - tol)
+                                     for m in methods if m != "cnbs")]
     out.append(f"- Paper: after one landmark CNBS has the lowest score on every class. Measured: "
-               f"lowest on {len(low1)} of {len(classes)} ({', '.join(low1) or 'none'}).")
+               f"lowest or tied on {len(low1)} of {len(classes)} ({', '.join(low1) or 'none'}), "
+               f"strictly lowest on {len(strict)} ({', '.join(strict) or 'none'}) — "
+               f"{'agrees' if len(low1) == len(classes) else 'disagrees'}.")
     for mt in matchers:
         le = [c for c in classes if err.get((c, "cnbs", min(3, L[c]), mt), math.inf)
               <= err.get((c, "fps", min(3, L[c]), mt), -math.inf)]
@@ -108,8 +115,9 @@ def claims(classes, methods, matchers, scores, err, L, data) -> list[str]:
                        f"between methods {a:.2f} points with all landmarks vs {b:.2f} with 3 — "
                        f"{'agrees' if a <= b else 'disagrees'}.")
         rho = _num(data["correlation"].get(mt, {}).get("rho"))
-        out.append(f"- Paper: score and error positively rank-correlated. {mt}: ρ = {_f(rho)} — "
-                   f"{'agrees' if rho > 0 else 'disagrees'}.")
+        p = _num(data["correlation"].get(mt, {}).get("p"))
+        out.append(f"- Paper: score and error positively rank-correlated. {mt}: ρ = {_f(rho)}, "
+                   f"p = {_f(p)} — {'agrees' if rho > 0 and p < 0.05 else 'disagrees (no significant positive correlation)'}.")
     return out
 
 
@@ -157,6 +165,7 @@ def main() -> None:
     ap.add_argument("--out", default="evaluation")
     ap.add_argument("--dense-check", default=None, metavar="DATASET_DIR",
                     help="also compare the dense extension methods on cat0 -> cat1")
+    ap.add_argument("--note", default=None, help="a Markdown file appended to the section (analysis)")
     ap.add_argument("--no-write", action="store_true", help="print only; leave RESULTS.md alone")
     a = ap.parse_args()
     wall = None
@@ -175,6 +184,8 @@ def main() -> None:
         write_report(ev, out)
     data = json.loads((out / "results.json").read_text())
     text = summarise(data, wall or sum(data["seconds"].values()))
+    if a.note:
+        text += "\n\n" + Path(a.note).read_text().strip()
     if a.dense_check:
         text += "\n\n" + dense_table(Path(a.dense_check))
     print(text)
