@@ -5,15 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from shapecond.cli import main
+from tests.conftest import run_cli as run
 from shapecond.shapes.synthetic import plane_patch
-
-
-def run(capsys, *argv):
-    with pytest.raises(SystemExit) as exit_info:
-        main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return exit_info.value.code, out, err
 
 
 def _write_off(path, V, F):
