@@ -17,6 +17,12 @@ from ``DX = D[:n, :n]``; landmarks are fixed points.  The search refines them
   lower bound of the distortion of row x sent to y (sorted rows matched; exact
   on landmark columns).  Since Dist²(T) ≥ Σ_x GL[x, Tx], small s favours large
   displacement, large s near-isometries; a grid of s gives a family of starts.
+* ``reflection_starts``: reflections of the MDS embedding (and their
+  out-of-sample extension to the targets Y).  A mirror usually flips the sign
+  of *several* MDS coordinates at once (centaur0: four of the first eight), so
+  single flips and pairs miss it; all 2^k − 1 sign patterns of the first k
+  coordinates are ranked by how well the reflected X lands on Y, and the best
+  few are refined by ICP (nearest targets + orthogonal Procrustes).
 * ``random_start``: a random permutation of the free samples.
 * ``repair``: makes any user map a valid start (landmarks fixed, injective).
 """
@@ -27,6 +33,7 @@ import itertools
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
 
 
 def swap_map(n: int, a: int, b: int) -> np.ndarray:
@@ -159,6 +166,101 @@ def gilmore_lawler_starts(DX: np.ndarray, free: np.ndarray, landmarks: np.ndarra
     out, seen = [], set()
     for s in s_values:
         t = _assign(W - s * GL, free, n)
+        key = t.tobytes()
+        if key not in seen and np.any(t != np.arange(n)):
+            seen.add(key)
+            out.append(t)
+    return out
+
+
+def _landmark_mds(D: np.ndarray, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Classical MDS of the samples X and its out-of-sample extension to Y.
+
+    Returns ``(phi, psi)``: phi (n, k') the MDS coordinates of ``D[:n, :n]``,
+    psi (M, k') the landmark-MDS coordinates (de Silva and Tenenbaum 2004) of
+    every point of Y from its distances to X (psi[:n] == phi), k' ≤ k the
+    coordinates with a clearly positive eigenvalue.
+    """
+    phi = _mds(D[:n, :n], k)
+    lam = np.sum(phi**2, axis=0)
+    keep = lam > 1e-9 * max(float(lam.max(initial=0.0)), 1e-300)
+    phi, lam = phi[:, keep], lam[keep]
+    mu = np.mean(D[:n, :n] ** 2, axis=1)
+    psi = -0.5 * ((D[:n, :] ** 2) - mu[:, None]).T @ (phi / lam)
+    return phi, psi
+
+
+def _nearest_injective(tree: cKDTree, q: np.ndarray, n: int, m: int, free: np.ndarray,
+                       landmarks: np.ndarray, k: int = 8) -> np.ndarray:
+    """Greedy injective nearest-target map: free samples (closest first) take
+    their nearest unused target among the ``k`` nearest; the rest go through
+    :func:`repair`.  Landmarks are fixed."""
+    k = min(k, m)
+    dist, idx = tree.query(q[free], k=k)
+    dist, idx = dist.reshape(free.size, k), idx.reshape(free.size, k)
+    t = np.full(n, -1, dtype=np.int64)
+    used = np.zeros(m, dtype=bool)
+    used[landmarks] = True
+    for r in np.argsort(dist[:, 0], kind="stable"):
+        for y in idx[r]:
+            if not used[y]:
+                used[y] = True
+                t[free[r]] = y
+                break
+    return repair(t, n, m, landmarks)
+
+
+#: Samples used to rank the sign patterns of :func:`reflection_starts`.
+RANK_PROBES = 96
+
+
+def reflection_starts(D: np.ndarray, n: int, free: np.ndarray, landmarks: np.ndarray,
+                      n_coords: int = 8, n_best: int = 3, iters: int = 3) -> list[np.ndarray]:
+    """Reflection starts: maps X -> Y from sign patterns of MDS coordinates.
+
+    An intrinsic symmetry T commutes with D, so on the MDS coordinates Φ of X
+    it acts (for simple eigenvalues) as a diagonal ±1 matrix S; a mirror
+    typically flips several coordinates, not one or two (DESIGN.md section 3:
+    on an animal the antisymmetric vector was only 6th by |λ|).  Every pattern
+    S ≠ I over the first ``n_coords`` coordinates is scored by the ratio
+
+        Σ_x |Φ_x S − Ψ_{nn(x)}|² / Σ_x |Φ_x S − Φ_x|²,
+
+    nn(x) the nearest point of Y in the extended embedding Ψ (a small value: S
+    maps X onto Y while moving it far, the embedding analogue of σ).  The
+    ``n_best`` patterns with the smallest ratio are refined by ``iters`` rounds
+    of ICP: injective nearest targets, then the orthogonal R minimising
+    |Φ R − Ψ_T|_F (Procrustes).  Returns maps into range(M) (M = D.shape[0]),
+    landmarks fixed; the search polishes them.  Cost: 2^k KD-tree queries of
+    at most ``RANK_PROBES`` samples each (0.1 s at N = 400, M = 3200, k = 8).
+    """
+    m = D.shape[0]
+    if free.size < 2:
+        return []
+    phi, psi = _landmark_mds(D, n, max(n_coords, 2))
+    k = phi.shape[1]
+    kc = min(n_coords, k)
+    if kc < 1:
+        return []
+    tree = cKDTree(psi)
+    probe = free[:RANK_PROBES]  # FPS order: the first samples already cover X
+    ranked = []
+    for mask in range(1, 2**kc):
+        sgn = np.ones(k)
+        sgn[[i for i in range(kc) if mask >> i & 1]] = -1.0
+        disp = 4.0 * float(np.sum(phi[probe][:, sgn < 0] ** 2))
+        if disp <= 0.0:
+            continue
+        dist, _ = tree.query(phi[probe] * sgn)
+        ranked.append((float(np.sum(dist**2)) / disp, mask, sgn))
+    ranked.sort(key=lambda r: (r[0], r[1]))
+    out, seen = [], set()
+    for _, _, sgn in ranked[:n_best]:
+        R = np.diag(sgn)
+        for _ in range(iters):
+            t = _nearest_injective(tree, phi @ R, n, m, free, landmarks)
+            U, _, Vt = np.linalg.svd(phi.T @ psi[t])
+            R = U @ Vt
         key = t.tobytes()
         if key not in seen and np.any(t != np.arange(n)):
             seen.add(key)
