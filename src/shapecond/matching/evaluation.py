@@ -44,7 +44,7 @@ PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog
                    "centaur": 7, "cat": 7, "wolf": 5}
 DEFAULT_LANDMARKS = 10
 #: bump when the landmark methods change, to invalidate cached selections
-LANDMARK_CACHE_VERSION = "1"
+LANDMARK_CACHE_VERSION = "2"
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 
@@ -293,10 +293,11 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
     Cached (JSON in the cache folder, keyed by the file, its size and mtime, and
     every parameter): CNBS at N = 400 takes minutes per class.
 
-    Scores: the method's own when it reports them (CNBS: the heat-map values it
-    selected by), otherwise ``symmetry_score`` (quick witness search: the
-    baselines' scores cost 3 searches per class and method).  ``floor``: the
-    best single swap with the same landmarks, to show when a score is only that.
+    Scores: ``symmetry_score`` (quick witness search) for every method alike, so
+    that Figure 7a compares one estimator: CNBS's own heat-map values are lower
+    bounds from warm starts and would not be comparable with the baselines'.
+    ``floor``: the best single swap with the same landmarks, to show when a score
+    is only that.
     """
     import json
 
@@ -321,16 +322,13 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
     sel = landmark_method(method)(shape, k, seed)
     idx = [int(i) for i in sel["sample_indices"]][:k]
     seconds = time.perf_counter() - t0
-    given = list(sel["scores"] or [])
     scores, floor = {}, {}
     for c in sorted({1, min(3, len(idx)), len(idx)}):
-        s = given[c - 1] if len(given) >= c and given[c - 1] is not None else None
-        scores[c] = float(s) if s is not None else symmetry_score(shape.D, shape.n_samples, idx[:c],
-                                                                  seed, True)
+        scores[c] = symmetry_score(shape.D, shape.n_samples, idx[:c], seed, True)
         floor[c] = swap_floor(shape.D, shape.n_samples, idx[:c])
     out = dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
                ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, floor=floor,
-               seconds=seconds, score_source="method" if given and given[0] is not None else "search")
+               seconds=seconds, score_source="search")
     if cache:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
