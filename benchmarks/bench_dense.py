@@ -56,7 +56,8 @@ from shapecond.symmetry.score import symmetry_score  # noqa: E402
 
 STORE = Path(__file__).parent / "out" / "bench_dense.json"
 READING = """
-Run of 2026-11-22: table at N = 400 (null shapes also at N = 100), flags recomputed after 962b6a9.
+Run of 2026-11-22: table at N = 400 (null shapes also at N = 100), null and table rows recomputed after
+13384bb (flag judged on the best global map) and b220e15 (reflection starts).
 
 * **Witness vs mirror.** The strict test (T(x) is *the* target nearest to sym(x)) holds on 73-90 % of
   samples, not >= 90 %: the witness is the mirror re-rounded to maximise the ratio. It scores above
@@ -66,15 +67,15 @@ Run of 2026-11-22: table at N = 400 (null shapes also at N = 100), flags recompu
   it is exactly the best one-point map, 3.97); the mirror is the search's second optimum (2.62, 96.8 %
   within 2 r). Thin tips and tails admit such local near-isometries, and with dense targets a
   one-point map can beat the global mirror.
-* **Resolution flag** (rule of commit 962b6a9: a symmetry witness must also move the samples by
-  >= 3 r RMS). The first run, with the older rule (RMS distortion over all N² pairs <= r), flagged
-  the deformed cat3, horse5, horse6 and wolf2 "symmetric within resolution" on the strength of witnesses
-  that move one to three samples (cat3: +10.8 %, 0.02 r). The new rule reports them "undecided"
-  (tests/symmetry/test_dense_tosca_free.py reproduces the case). Seven of the eight null rows are
-  "symmetric within resolution". horse0 at N=400 is now "undecided": its witness is the one-point map,
-  while its mirror (the second optimum, 2.62, 96.8 % within 2 r) would qualify. Judging the best
-  *global* optimum among the search's maps would fix this. Deformed poses flagged symmetric (dog1,
-  michael1, wolf1) have mirror-like witnesses: see the last item.
+* **Resolution flag.** A symmetry witness must move the samples by >= 3 r RMS (962b6a9), and the flag
+  is judged on the best such *global* map among the search's optima (13384bb). The first run, with
+  the older rule (RMS distortion over all N² pairs <= r), flagged the deformed cat3, horse6 and wolf2
+  "symmetric within resolution" on the strength of witnesses that move one to three samples; they are
+  now "converged" or "undecided" (tests/symmetry/test_dense_tosca_free.py reproduces the case). All
+  eight null rows are "symmetric within resolution", horse0 at N=400 included: its top witness is
+  the one-point map (3.97) but its mirror (2.62, 96.8 % within 2 r) grows +57.5 % from M/2 to M.
+  Deformed poses flagged symmetric (dog1, horse5, michael1, wolf1) have mirror-like witnesses: see
+  the last item.
 * **Score against the best single swap.** >= 2x in all eight null rows (dog0 N=400 only just: 2.00x;
   the nearest-target mirror alone is 1.91x there).
 * **Symmetry-consistent sampling.** inf for cat0 and victoria0 (relative RMS distortion of the mirror
@@ -82,10 +83,11 @@ Run of 2026-11-22: table at N = 400 (null shapes also at N = 100), flags recompu
   161-685 with the mirror as witness: their triangulations are not mirror images, so the heat-method
   distances are symmetric only to 8e-5 and 1.8e-4 relative, far above ISOMETRY_RTOL = 1e-6 (and far
   below the heat method's own error, ~0.6 % of the diameter).
-* **Search miss on centaur.** For centaur0/1/2 the search returns the best single swap (moves 2
-  samples). The nearest-target mirror of centaur0 scores 3.18 at N=400 (polished from it: 3.72) and
-  2.90 at N=100 (3.29), where the search gives 1.91 even at effort "thorough". centaur0 is therefore
-  reported "converged" at 1.24 instead of symmetric.
+* **Centaur.** The first run missed the centaur0 mirror (the search returned the best single swap,
+  1.24, while the nearest-target mirror scores 3.18): the mirror flips MDS coordinates 2, 4, 5 and 7
+  at once, which single and paired sign flips cannot produce. The reflection starts of b220e15 (all
+  sign patterns of the first MDS coordinates, ranked, refined by ICP over Y) reach it: 3.66, flagged
+  "symmetric within resolution", 95 % of samples within 2 r of the .sym mirror.
 * **Deformed poses, M = 16N vs 8N.** Within 10 % for cat3, cat1, centaur1/2, david1/6, dog5, michael2,
   victoria2 at N = 100 and 200. Not for dog1, horse5, michael1, wolf1 (+19 % to +357 %), nor
   victoria1 at N = 100 (+11.7 %). TOSCA poses are near-isometric, so the intrinsic mirror survives
