@@ -8,7 +8,6 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 import json
 import math
 import sys
@@ -172,20 +171,6 @@ def emit_json(obj) -> None:
 
 def json_option(f):
     return click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")(f)
-
-
-def timed(f):
-    """Decorator adding the elapsed seconds as ``seconds`` to a returned dict."""
-    import time
-
-    @functools.wraps(f)
-    def wrapper(*args, **kwargs):
-        t0 = time.perf_counter()
-        out = f(*args, **kwargs)
-        out["seconds"] = time.perf_counter() - t0
-        return out
-
-    return wrapper
 
 
 def fmt(value, digits: int = 4) -> str:

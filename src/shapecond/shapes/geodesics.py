@@ -100,9 +100,3 @@ def _exact_solver(V: np.ndarray, F: np.ndarray):
 
     return one
 
-
-def pairwise_distances(geometry: Geometry, vertices, backend: str = "heat") -> np.ndarray:
-    """Symmetrised distance matrix between the given vertices (``(D + Dᵀ)/2``)."""
-    vertices = np.asarray(vertices, dtype=np.int64)
-    rows = DistanceSolver(geometry, backend).distances(vertices)[:, vertices]
-    return 0.5 * (rows + rows.T)
