@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -68,15 +68,8 @@ class ExactResult:
     nodes: int = 0
 
     def to_dict(self) -> dict:
-        return {
-            "sigma": self.sigma,
-            "witness": None if self.witness is None else [int(v) for v in self.witness],
-            "finished": self.finished,
-            "seconds": self.seconds,
-            "method": self.method,
-            "lower": self.lower,
-            "nodes": self.nodes,
-        }
+        """The fields as a dict (numpy arrays included; ``cli.common.jsonable`` converts them)."""
+        return asdict(self)
 
 
 def check_instance(D, n_samples=None, landmarks=()):

@@ -66,7 +66,7 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -94,14 +94,8 @@ class LPResult:
     n_cuts: int = 0
 
     def to_dict(self) -> dict:
-        return {
-            "upper": self.upper,
-            "seconds": self.seconds,
-            "n_variables": self.n_variables,
-            "n_constraints": self.n_constraints,
-            "status": self.status,
-            "n_cuts": self.n_cuts,
-        }
+        """The fields as a dict (numpy arrays included; ``cli.common.jsonable`` converts them)."""
+        return asdict(self)
 
 
 def lp_size(n_free: int, n_targets: int) -> int:
