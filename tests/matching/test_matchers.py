@@ -135,7 +135,6 @@ def test_matchers_on_two_different_samplings():
     p = p[p[:, 1] < 1.0 - 0.35 * p[:, 0]]
     a, b = p[_fps(p, 150, 0)], p[_fps(p, 150, 1)].copy()
     ls = np.array([0, 1, 2])
-    truth = cdist(a, b).argmin(1)
     lt = np.array([10, 20, 30])
     b[lt] = a[ls]
     Ds, Dt = cdist(a, a), cdist(b, b)

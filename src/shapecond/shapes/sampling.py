@@ -82,10 +82,10 @@ def farthest_point_sampling(solver, n_samples: int, landmarks=(), seed: int = 0,
     def add(v: int) -> None:
         row = solver.distances([v])[0]
         k = len(samples)
-        if k:
-            D[k, :k] = D[:k, k] = row[samples]
         if rows is not None:
-            rows[k] = row
+            rows[k] = row  # D is symmetrised from the kept rows at the end
+        elif k:
+            D[k, :k] = D[:k, k] = row[samples]
         closer = row < min_dist
         min_dist[closer] = row[closer]
         nearest[closer] = k
