@@ -1,7 +1,7 @@
 """Local symmetry score for deformation-based matching (paper Section 5; DESIGN.md 2.3, 3).
 
 * ``energy``      E(P) (point-to-plane proximity + edge springs or ARAP) and its exact Hessian at 0
-* ``solver``      nested-dissection SuperLU factor of H + sM, reused for every landmark set
+* ``solver``      sparse Cholesky (CHOLMOD) factor of H + sM, reused for every landmark set
 * ``rigid``       naming zero modes by the six rigid motions
 * ``local_score`` sigma_inf = sqrt(2 / lambda_min(H, M)), ``LocalScore``, ``LocalProblem``
 * ``heatmap``     the score with each vertex fixed, greedy landmarks (local CNBS)

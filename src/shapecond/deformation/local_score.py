@@ -98,10 +98,11 @@ class LocalProblem:
     vertices : (n, 3), faces : (m, 3) -- faces ``None`` (a point cloud) is refused.
     alpha : float, weight of the stretching term (``energy.py``; default 1)
     energy : "springs" (default) or "arap"
+    backend : linear solver, "cholmod" (default when cholespy is installed) or "superlu" (``solver.py``)
     """
 
     def __init__(self, vertices, faces, alpha: float = DEFAULT_ALPHA, energy: str = "springs",
-                 shift: float = SHIFT):
+                 shift: float = SHIFT, backend: str | None = None):
         t0 = time.perf_counter()
         if faces is not None and np.asarray(vertices).shape[0] > MAX_VERTICES:
             raise TooLargeError(f"the local score is limited to {MAX_VERTICES} vertices (it factorises a "
@@ -111,7 +112,7 @@ class LocalProblem:
         self.alpha, self.energy = float(alpha), energy
         self.H = hessian(V, F, alpha=alpha, energy=energy)
         self.mass = mass_diagonal(V, F)
-        self.solver = ShiftInvertSolver(self.H, self.mass, V, shift=shift)
+        self.solver = ShiftInvertSolver(self.H, self.mass, V, shift=shift, backend=backend)
         self.setup_seconds = time.perf_counter() - t0
 
     @property

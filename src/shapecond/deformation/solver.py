@@ -1,29 +1,62 @@
 """Smallest eigenpairs of ``H v = lambda M v`` with fixed vertices, one factorisation for all.
 
 DESIGN.md section 3 (local score) and paper Section 6 (landmarks remove the
-rows and columns of their coordinates).  What was measured (2 shared cores,
-bumpy blob, springs energy; see benchmarks/RESULTS.md for the current figures):
+rows and columns of their coordinates).
+
+``A = H + s M`` (``s = SHIFT``, small, so A is positive definite even with
+zero modes) is factorised once.  Fixing a set S of coordinates is a bordered
+system: ``[A E; E^T 0][x; mu] = [b; 0]`` solved with the same factor and
+``W = A^{-1} E`` (one block solve of 3 columns per fixed vertex), so adding a
+landmark or trying a candidate costs three solves instead of a new
+factorisation.  The eigenpairs come from ARPACK in shift-invert mode (k = 4,
+ncv = 30, tol = 1e-8: ~31 solves).
+
+Backends (``backend=``), picked by measurement.  Factorisation of ``A`` alone /
+one solve, single-threaded, quiet 2-core machine, springs energy; 10k = bumpy
+blob (10,242 vertices), 53k = TOSCA david0, 111k = cat0 after one midpoint
+subdivision:
+
+==========================================  ===========  ===========  ===========
+backend                                     10k          53k          111k
+==========================================  ===========  ===========  ===========
+**cholmod**: CHOLMOD via ``cholespy`` 2.2   0.45 s / 8   1.3 s / 31   5.9 s / 87
+CHOLMOD via scikit-sparse 0.4 (apt          0.46-0.89 s  1.1-1.6 s /  5.0-6.7 s /
+SuiteSparse 5.12 with METIS; supernodal or  / 9-12 ms    31-37 ms     86-113 ms
+simplicial, AMD or METIS)
+qdldl 0.1.9 (AMD)                           1.1 s / 12   1.2 s / 36   8.6 s / 125
+pypardiso 0.4.7 (MKL)                       -            0.9 s / 92   -
+**superlu**: SuperLU, nested dissection     0.44 s / 10  3.5 s / 70   16 s / 175
+==========================================  ===========  ===========  ===========
+
+(ms per solve after the slash.)  ``cholmod`` is the default: a pip wheel of
+under 1 MB with no dependencies, as fast as scikit-sparse's CHOLMOD (which
+needs Debian's libsuitesparse-dev, and scikit-sparse 0.5 does not build against
+its SuiteSparse 5), 2.7x faster than SuperLU to factorise at 53k and 2.2x per
+solve.  pypardiso factorises fastest but its solve re-checks the matrix every
+call (3x slower solves) and it pulls in ~700 MB of MKL.  An earlier
+measurement of cholespy (1.0 s at 10k, 13.8 s at 41k, on a loaded machine) was
+not reproduced.  End to end on david0 (Hessian, factor, score): 6.3 s with
+SuperLU, 2.9 s with cholmod.
+
+``superlu`` is kept as the fallback when cholespy cannot be imported (a
+platform without its wheel) or CHOLMOD finds ``A`` not positive definite in
+floating point, and as an independent check of the Cholesky path in the tests.
+It is LU without pivoting in a hand-written **geometric nested-dissection
+ordering of the vertex graph** (``nested_dissection``; each vertex's three
+coordinates kept together), because SciPy's own orderings are far slower on
+these matrices: 0.9 s (COLAMD) / 3.8 s (MMD on A+A^T) at 10k vertices.
+
+Other things measured:
 
 * LOBPCG preconditioned by pyamg smoothed aggregation (rigid-body near null
   space) did not converge in 300 iterations at 10k vertices (76 s): the
   operator couples a stiff normal direction with soft tangential stretching,
   which aggregation handles badly.  Rejected.
-* SuperLU with its own orderings: 0.9 s (COLAMD) / 3.8 s (MMD on A+A^T) to
-  factorise at 10k vertices, and slow solves.  CHOLMOD through ``cholespy``:
-  1.0 s at 10k, 13.8 s at 41k vertices.  Both slower than:
-* SuperLU without pivoting on a **geometric nested-dissection ordering of the
-  vertex graph** (``nested_dissection``; each vertex's three coordinates kept
-  together): 0.7 s at 10k, 4.5 s at 41k vertices under load, solves 22 / 49 ms.
-  This is what we use, with ARPACK in shift-invert mode (k = 4, ncv = 30,
-  tol = 1e-8: ~30 solves).  CPU seconds for build + factor + eigen-solve:
-  1.0 s at 10k, 4.7 s at 41k (blob), 6.8 s at 53k (david0), 21 s at 111k
-  vertices (benchmarks/RESULTS.md, section "local").
-
-``A = H + s M`` (``s = SHIFT``, small, so A is positive definite even with
-zero modes) is factorised once.  Fixing a set S of coordinates is a bordered
-system: ``[A E; E^T 0][x; mu] = [b; 0]`` solved with the same factor and
-``W = A^{-1} E`` (3 solves per fixed vertex), so adding a landmark or trying a
-candidate costs three solves instead of a new factorisation.
+* ARPACK's ``ncv`` in 12..30 and ``tol`` 1e-6 or 1e-8: 25-46 solves on david0
+  with and without landmarks, no setting better everywhere than ncv = 30 (31
+  solves without landmarks); the eigenvalues agreed to 1e-11.  Block solves
+  are cheaper per column (4 columns in 46 ms against 31 ms for one at 53k),
+  which block methods could use; not needed for the target.
 """
 
 from __future__ import annotations
@@ -37,7 +70,20 @@ try:  # optional: limits BLAS threads around ARPACK
 except ImportError:  # pragma: no cover
     _limits = None
 
+try:  # a dependency; guarded so that a platform without its wheel still works (SuperLU)
+    from cholespy import CholeskySolverD as _Cholesky, MatrixType as _MatrixType
+except ImportError:  # pragma: no cover
+    _Cholesky = _MatrixType = None
+
+from ..errors import InputError
+
 SHIFT = 1e-5  # relative to the proximity stiffness 2 of the unit-area mesh
+BACKENDS = ("cholmod", "superlu")
+
+
+def default_backend() -> str:
+    """``"cholmod"`` (sparse Cholesky through cholespy) when importable, else ``"superlu"``."""
+    return "cholmod" if _Cholesky is not None else "superlu"
 
 
 def vertex_graph(H: sp.spmatrix) -> sp.csr_matrix:
@@ -110,34 +156,57 @@ def one_blas_thread():
 
 
 class ShiftInvertSolver:
-    """Factor of ``A = H + SHIFT * M`` in a nested-dissection order, with fixed-vertex solves.
+    """Factor of ``A = H + SHIFT * M``, with fixed-vertex solves.
 
     Parameters
     ----------
     H : (3n, 3n) sparse symmetric positive semi-definite
     mass : (3n,) positive lumped mass diagonal
-    V : (n, 3) vertex positions (for the ordering)
+    V : (n, 3) vertex positions (for the SuperLU ordering)
+    backend : "cholmod" (Cholesky, default when cholespy is installed) or "superlu"
+        (LU without pivoting in a nested-dissection order); module docstring.
     """
 
-    def __init__(self, H: sp.spmatrix, mass: np.ndarray, V: np.ndarray, shift: float = SHIFT):
+    def __init__(self, H: sp.spmatrix, mass: np.ndarray, V: np.ndarray, shift: float = SHIFT,
+                 backend: str | None = None):
         self.H = H.tocsr()
         self.mass = np.asarray(mass, dtype=np.float64)
         self.shift = float(shift)
         self.n_dof = self.H.shape[0]
-        order = nested_dissection(V, vertex_graph(self.H))
-        self.perm = (3 * order[:, None] + np.arange(3)).ravel()
-        self.iperm = np.empty_like(self.perm)
-        self.iperm[self.perm] = np.arange(self.n_dof)
-        A = (self.H + sp.diags(self.shift * self.mass)).tocsc()
-        Ap = A[self.perm][:, self.perm].tocsc()
-        self.lu = sla.splu(Ap, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                           options=dict(SymmetricMode=True))
+        backend = default_backend() if backend is None else backend
+        if backend not in BACKENDS:
+            raise InputError(f"unknown solver backend {backend!r}; choose one of {', '.join(BACKENDS)}")
+        if backend == "cholmod" and _Cholesky is None:
+            raise InputError("the cholmod backend needs the cholespy package (pip install cholespy)")
+        A = self.H + sp.diags(self.shift * self.mass)
+        self._chol = self.lu = None
+        if backend == "cholmod":
+            L = sp.tril(A, format="csc")  # CHOLMOD reads the lower triangle
+            try:
+                self._chol = _Cholesky(self.n_dof, L.indptr.astype(np.int32), L.indices.astype(np.int32),
+                                       np.ascontiguousarray(L.data, dtype=np.float64), _MatrixType.CSC)
+            except ValueError:  # not positive definite in floating point: LU does not need it
+                backend = "superlu"
+        if backend == "superlu":
+            order = nested_dissection(V, vertex_graph(self.H))
+            self.perm = (3 * order[:, None] + np.arange(3)).ravel()
+            self.iperm = np.empty_like(self.perm)
+            self.iperm[self.perm] = np.arange(self.n_dof)
+            Ap = A.tocsc()[self.perm][:, self.perm].tocsc()
+            self.lu = sla.splu(Ap, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                               options=dict(SymmetricMode=True))
+        self.backend = backend
         self.n_solves = 0
         self._W: dict[int, np.ndarray] = {}  # dof -> column of A^{-1} e_dof
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """``A^{-1} b`` for a vector or (3n, k) block."""
         self.n_solves += 1 if b.ndim == 1 else b.shape[1]
+        if self._chol is not None:
+            b = np.ascontiguousarray(b, dtype=np.float64)
+            x = np.empty_like(b)
+            self._chol.solve(b, x)
+            return x
         return self.lu.solve(np.ascontiguousarray(b[self.perm]))[self.iperm]
 
     def _columns(self, dofs: np.ndarray) -> np.ndarray:
@@ -145,7 +214,7 @@ class ShiftInvertSolver:
         if missing:
             E = np.zeros((self.n_dof, len(missing)))
             E[missing, np.arange(len(missing))] = 1.0
-            X = np.column_stack([self.solve(E[:, k]) for k in range(len(missing))])
+            X = self.solve(E)
             for k, d in enumerate(missing):
                 self._W[d] = X[:, k]
         return np.column_stack([self._W[int(d)] for d in dofs]) if len(dofs) else np.zeros((self.n_dof, 0))
