@@ -124,11 +124,22 @@ def mesh_edges(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _block_pairs(rows: np.ndarray, cols: np.ndarray, blocks: np.ndarray, n: int) -> sp.csr_matrix:
-    """Sparse (3n, 3n) matrix from 3x3 ``blocks[k]`` placed at block (rows[k], cols[k])."""
-    shape = (len(rows), 3, 3)
-    r = np.broadcast_to(3 * rows[:, None, None] + np.arange(3)[None, :, None], shape).ravel()
-    c = np.broadcast_to(3 * cols[:, None, None] + np.arange(3)[None, None, :], shape).ravel()
-    return sp.csr_matrix((blocks.ravel(), (r, c)), shape=(3 * n, 3 * n))
+    """Sparse (3n, 3n) matrix from 3x3 ``blocks[k]`` summed into block (rows[k], cols[k]).
+
+    Duplicates are summed per block (one sort of the block keys, nine
+    ``bincount``) and the result is built as a block-sparse matrix: on david0
+    (53k vertices) 0.1 s instead of 0.2-0.5 s for a scalar COO matrix with 9x
+    as many entries to sort.
+    """
+    keys = rows.astype(np.int64) * n + cols
+    uniq, inverse = np.unique(keys, return_inverse=True)
+    flat = np.asarray(blocks, dtype=np.float64).reshape(len(keys), 9)
+    data = np.empty((len(uniq), 9))
+    for k in range(9):
+        data[:, k] = np.bincount(inverse.ravel(), weights=flat[:, k], minlength=len(uniq))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(uniq // n, minlength=n), out=indptr[1:])
+    return sp.bsr_matrix((data.reshape(-1, 3, 3), uniq % n, indptr), shape=(3 * n, 3 * n)).tocsr()
 
 
 def _cross_matrices(e: np.ndarray) -> np.ndarray:
