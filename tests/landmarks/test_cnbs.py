@@ -71,11 +71,12 @@ def test_repair_fixing_one_move():
         assert np.sum(r != t) <= 2
 
 
-def test_heat_map_is_a_bracketed_lower_bound():
+@pytest.mark.parametrize("prune", [False, True])
+def test_heat_map_is_a_bracketed_lower_bound(prune):
     """Each value is a σ of a feasible map (<= exact σ with p fixed) and >= the swap floor."""
     for seed in range(6):
         D = near_symmetric(7, seed)
-        hm = heat_map(D, 7, landmarks=[], seed=seed)
+        hm = heat_map(D, 7, landmarks=[], seed=seed, prune=prune)
         S = swap_scores(D, 7)
         for p in range(7):
             ex = exact_sigma(D, 7, landmarks=[p]).sigma
@@ -128,3 +129,22 @@ def test_animal_first_landmark_off_the_mirror_plane():
     assert np.allclose(imp[on_plane], 0.0)
     assert imp[on_plane].max() <= np.nanmin(imp[~on_plane]) + 1e-12
     assert hm.values[c] < hm.sigma_before
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_pruned_heat_map_keeps_the_argmin(seed):
+    """Pruning stops searches above the incumbent: same argmin, values still lower bounds."""
+    n = 16
+    D = near_symmetric(n, 40 + seed, noise=0.04)
+    full = heat_map(D, n, seed=0)
+    cut = heat_map(D, n, seed=0, prune=True)
+    c = cut.argmin()
+    assert cut.pruned.any()  # otherwise this test tests nothing
+    assert not cut.pruned[c]
+    assert math.isclose(cut.values[c], full.values[full.argmin()], rel_tol=1e-9)
+    # a pruned candidate stopped above the leader's value: it could not be the argmin
+    assert np.all(cut.values[cut.pruned] >= cut.values[c])
+    for p in np.flatnonzero(cut.pruned):
+        w = cut.results[p].witness if p in cut.results else None
+        if w is not None and cut.values[p] == cut.results[p].sigma:
+            assert w[p] == p and math.isclose(map_score(D, w), cut.values[p], rel_tol=1e-9)

@@ -61,7 +61,8 @@ class WarmPolisher:
             used = np.zeros(m, dtype=bool)
             used[t] = True
             d2v, dist2v, _ = K.local_search(self.D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0,
-                                            obj.d2(self.D, t), obj.dist2(self.D, t), self.floor, 50 * n)
+                                            obj.d2(self.D, t), obj.dist2(self.D, t), self.floor, 50 * n,
+                                            np.inf)
             key = t.tobytes()
             if key not in seen:
                 seen.add(key)
@@ -87,14 +88,26 @@ class WarmPolisher:
         return t, G, H, used, d2v, dist2v
 
     def __call__(self, landmarks, p, extra_starts=(), rng=None, n_kicks=0):
-        """Best local optimum from the base maps repaired to fix ``p``.
+        """Best local optimum from the base maps repaired to fix ``p`` (SearchResult or None).
 
         Also from ``extra_starts`` (full G product each) and, with ``rng``, from
         ``n_kicks`` kicked copies of the repaired base maps (random swaps of free
         samples applied by rank-1 updates: the iterated-local-search re-solve).
         """
+        return self.bounded(landmarks, p, extra_starts, rng, n_kicks)[0]
+
+    def bounded(self, landmarks, p, extra_starts=(), rng=None, n_kicks=0, stop=math.inf):
+        """As ``__call__``, but give up once some map fixing ``p`` scores above ``stop``.
+
+        Returns ``(result, pruned)``.  With ``pruned`` True the search stopped early:
+        ``result.sigma > stop`` is still a valid lower bound of σ with ``p`` fixed
+        (its witness fixes ``p``), only not the best this search would have found.
+        Used by the pruned CNBS heat map (``cnbs.heat_map(prune=True)``), where a
+        candidate above the incumbent minimum cannot be the argmin.
+        """
         K, obj, D, n = self.K, self.obj, self.D, self.n
         m = D.shape[0]
+        stop2 = stop * stop if stop < math.inf else np.inf
         lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
         free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
         found = {}  # map bytes -> (tracked ratio d²/Dist², map)
@@ -102,40 +115,52 @@ class WarmPolisher:
         def keep(t, d2v, dist2v):
             r = 0.0 if d2v <= 0.0 else (math.inf if dist2v <= self.floor else d2v / dist2v)
             found.setdefault(t.tobytes(), (r, t))
+            return r > stop2
+
+        def search(t, G, H, used, d2v, dist2v):
+            d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, d2v,
+                                            dist2v, self.floor, 50 * n, stop2)
+            return keep(t, d2v, dist2v)
 
         jobs = [(b, 0) for b in range(len(self.base))]
         if rng is not None and self.base:
             hi = max(3, free.size // 8)
             jobs += [(k % len(self.base), int(rng.integers(2, hi + 1))) for k in range(n_kicks)]
+        pruned = False
         for b, size in jobs:
             t0, _, _, d20, dist20 = self.base[b]
             if size == 0 and t0[p] == p and np.all(t0[lm] == lm):
-                keep(t0, d20, dist20)  # still a local optimum with p fixed: nothing to search
-                continue
-            t, G, H, used, d2v, dist2v = self._repaired(b, p)
-            if np.any(t[lm] != lm):
-                continue  # a base map that moves a landmark (cannot happen for true warm maps)
-            for _ in range(size - 1):
-                a, c = rng.choice(free, size=2, replace=False)
-                dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
-                K.apply_swap(D, n, t, G, int(a), int(c))
-                d2v, dist2v = d2v + dd, dist2v + dD
-            d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, d2v,
-                                            dist2v, self.floor, 50 * n)
-            keep(t, d2v, dist2v)
-        for t in extra_starts:
+                pruned = keep(t0, d20, dist20)  # still a local optimum with p fixed: nothing to search
+            else:
+                t, G, H, used, d2v, dist2v = self._repaired(b, p)
+                if np.any(t[lm] != lm):
+                    continue  # a base map that moves a landmark (cannot happen for true warm maps)
+                for _ in range(size - 1):
+                    a, c = rng.choice(free, size=2, replace=False)
+                    dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
+                    K.apply_swap(D, n, t, G, int(a), int(c))
+                    d2v, dist2v = d2v + dd, dist2v + dD
+                pruned = search(t, G, H, used, d2v, dist2v)
+            if pruned:
+                break
+        for t in extra_starts if not pruned else ():
             t = self.search.S.repair(t, n, m, lm)
             G = D[:n, :n] @ D[t, :]
             H = np.sum(D[t, :] ** 2, axis=0)
             used = np.zeros(m, dtype=bool)
             used[t] = True
-            d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0,
-                                            obj.d2(D, t), obj.dist2(D, t), self.floor, 50 * n)
-            keep(t, d2v, dist2v)
+            if search(t, G, H, used, obj.d2(D, t), obj.dist2(D, t)):
+                pruned = True
+                break
+        return self._result(found), pruned
+
+    def _result(self, found):
+        """SearchResult of the best maps found, the best two re-scored exactly."""
         # rank by the tracked values (rank-1 updates, exact up to round-off); the best
         # two are re-scored exactly, so the reported σ is the exact σ of its witness
+        n = self.n
         ranked = sorted(found.values(), key=lambda it: -it[0])[: self.search.KEEP]
-        pool = self.search.MapPool(D, n)
+        pool = self.search.MapPool(self.D, n)
         for _, t in ranked[:2]:
             pool.add(t)
         exact = pool.top(2)

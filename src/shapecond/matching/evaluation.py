@@ -44,7 +44,7 @@ PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog
                    "centaur": 7, "cat": 7, "wolf": 5}
 DEFAULT_LANDMARKS = 10
 #: bump when the landmark methods change, to invalidate cached selections
-LANDMARK_CACHE_VERSION = "2"
+LANDMARK_CACHE_VERSION = "3"
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 

@@ -128,7 +128,7 @@ def _value(ratio, s, num, den, floor):
 
 
 @njit(cache=True)
-def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_moves):
+def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_moves, stop):
     """Best-improvement local search over swaps and nearby reassignments.
 
     Parameters
@@ -144,6 +144,10 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
     floor : Dist² values below it count as ``floor`` (a ratio never divides by
         round-off; isometries are decided exactly by the caller).
     max_moves : cap on accepted moves.
+    stop : in ``MODE_RATIO``, stop as soon as the current value d²/Dist² exceeds
+        ``stop`` (``np.inf``: never).  The value only grows during the search, so a
+        caller looking for a minimum over several searches (the CNBS heat map's
+        argmin) learns all it needs once a search passes the incumbent.
 
     Returns
     -------
@@ -175,6 +179,8 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
     ratio = mode == MODE_RATIO
     while moves < max_moves:
         cur = _value(ratio, s, d2, dist2, floor)
+        if ratio and cur > stop:
+            break
         best = cur + 1e-12 * abs(cur)
         kind = -1
         ba = -1
