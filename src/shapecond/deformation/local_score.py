@@ -42,7 +42,7 @@ from .solver import SHIFT, ShiftInvertSolver
 
 LAMBDA_REF = 2.0
 ZERO_TOL = 1e-3
-MAX_VERTICES = 300_000  # measured: 2 GB and ~50 s at 111k vertices; memory grows ~ n log n
+MAX_VERTICES = 300_000  # measured: 1 GB and ~10 s at 111k vertices (benchmarks/RESULTS.md)
 
 
 @dataclass(frozen=True, eq=False)

@@ -35,8 +35,17 @@ its SuiteSparse 5), 2.7x faster than SuperLU to factorise at 53k and 2.2x per
 solve.  pypardiso factorises fastest but its solve re-checks the matrix every
 call (3x slower solves) and it pulls in ~700 MB of MKL.  An earlier
 measurement of cholespy (1.0 s at 10k, 13.8 s at 41k, on a loaded machine) was
-not reproduced.  End to end on david0 (Hessian, factor, score): 6.3 s with
-SuperLU, 2.9 s with cholmod.
+not reproduced.  End to end (Hessian, factor, score; benchmarks/RESULTS.md):
+david0 6.3 s with SuperLU, 2.9 s with cholmod; cat0 at 111k 19.8 s -> 10.4 s;
+peak memory about halved (L only instead of L and U).
+
+Known regression: on the bumpy blob at 41k vertices (a closed, compact,
+sphere-like surface, whose separators are long) cholmod takes 6.6 s end to end
+against 4.1 s for SuperLU (factor 4.6 s against 2.7 s): cholespy's CHOLMOD is
+simplicial, and there the dense fronts favour a supernodal factor.
+scikit-sparse's supernodal CHOLMOD with METIS factorises it in 2.8 s (simplicial
+METIS 4.4 s, AMD 14.5 s), but needs apt SuiteSparse and a source build, and is
+no faster than cholespy on the TOSCA meshes; not adopted.
 
 ``superlu`` is kept as the fallback when cholespy cannot be imported (a
 platform without its wheel) or CHOLMOD finds ``A`` not positive definite in
