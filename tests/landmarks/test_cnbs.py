@@ -148,3 +148,13 @@ def test_pruned_heat_map_keeps_the_argmin(seed):
         w = cut.results[p].witness if p in cut.results else None
         if w is not None and cut.values[p] == cut.results[p].sigma:
             assert w[p] == p and math.isclose(map_score(D, w), cut.values[p], rel_tol=1e-9)
+
+
+@pytest.mark.parametrize("max_verify", [0, 1, 3])
+def test_pruned_heat_map_never_returns_a_pruned_argmin(max_verify):
+    """Whatever the verification budget, the argmin is a fully evaluated candidate with a witness."""
+    for seed in range(4):
+        D = near_symmetric(18, 60 + seed, noise=0.05)
+        hm = heat_map(D, 18, seed=0, prune=True, max_verify=max_verify)
+        c = hm.argmin()
+        assert not hm.pruned[c] and c in hm.results

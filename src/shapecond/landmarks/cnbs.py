@@ -271,12 +271,12 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     donors = sorted((p for p in results if p not in L), key=lambda p: -values[p])[:n_cross]
     donor_maps = [results[p].witness for p in donors]
     rounds = 0
-    while rounds < max_verify:
+    while True:
         c = HeatMap(values, sigma0, tuple(L), moved, resolved).argmin()
-        if pruned[c]:
+        if pruned[c]:  # the returned argmin is never a pruned candidate
             pruned[c] = evaluate(c, math.inf)
             continue
-        if verified[c]:
+        if verified[c] or rounds >= max_verify:
             break
         verified[c] = True
         rounds += 1
@@ -349,10 +349,10 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
         c = hm.argmin()
         new.append(c)
         scores.append(float(hm.values[c]))
-        base = hm.results[c]
-        if float(base.sigma) < hm.values[c]:
+        prev, base = base, hm.results.get(c)
+        if base is None or float(base.sigma) < hm.values[c]:
             # the single-swap floor won: continue from a witness that attains it
-            base = _swap_witness(D, n, L + [c], base)
+            base = _swap_witness(D, n, L + [c], base or prev)
         L.append(c)
         if keep_heat_maps:
             maps.append(hm)
