@@ -154,6 +154,68 @@ def dense_table(dataset: Path, cls: str = "cat", n_points: int = 400) -> str:
     return "\n".join(rows)
 
 
+def dense_scores(data: dict, dataset: Path, out: Path, effort: str = "quick") -> str:
+    """σ with dense targets (M = 8N, DESIGN.md 1) for every landmark set of a run, and its
+    rank correlation with the matching error: does it predict the error better than the
+    bijection score of Figure 7a, which a two-sample swap dominates?  Cached in
+    ``out/dense_scores.json`` (one dense metric shape per null shape, then ~5 s a score)."""
+    from scipy.stats import spearmanr
+
+    from shapecond.matching.evaluation import class_shapes
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
+    from shapecond.symmetry.search import witness_search
+
+    st = data["settings"]
+    path = out / "dense_scores.json"
+    done = json.loads(path.read_text()) if path.exists() else {}
+    by_cls = {}
+    for d in data["landmarks"]:
+        by_cls.setdefault(d["cls"], []).append(d)
+    for cls, ds in by_cls.items():
+        need = [(d, int(c)) for d in ds for c in d["scores"] if f"{cls}/{d['method']}/{c}" not in done]
+        if not need:
+            continue
+        print(f"[dense scores] {cls}", file=sys.stderr, flush=True)
+        g = load_geometry(class_shapes(Path(dataset) / cls)[0])
+        shape = metric_shape(g, st["n_points"], backend=st["backend"], seed=st["seed"], target="dense")
+        for d, c in need:
+            idx = shape.landmark_indices(d["ids"][:c])
+            r = witness_search(shape.D, shape.n_samples, [int(i) for i in idx], seed=st["seed"], effort=effort)
+            done[f"{cls}/{d['method']}/{c}"] = "inf" if math.isinf(r.sigma) else r.sigma
+            path.write_text(json.dumps(done, indent=1))
+    errs = {}
+    for r in data["records"]:
+        errs.setdefault((r["cls"], r["method"], r["n_landmarks"], r["matcher"]), []).append(r["error"])
+    lines = [f"### Dense-target score against error (N = {st['n_points']}, M = 8N, {effort} search)", "",
+             "The same landmark sets scored with dense targets (maps may send a sample to any of 8N "
+             "points, so a swap of two neighbouring samples no longer dominates); cells are (class, "
+             "method, 3 or all landmarks) as above.", "",
+             "| matcher | ρ bijection score | ρ dense score | cells | mean within-class ρ, dense |",
+             "|---|---|---|---|---|"]
+    for mt in st["matchers"]:
+        xb, xd, ys, per = [], [], [], {}
+        for (cls, m, c, mm), v in errs.items():
+            key = f"{cls}/{m}/{c}"
+            sb = next((_num(d["scores"].get(str(c), d["scores"].get(c))) for d in data["landmarks"]
+                       if d["cls"] == cls and d["method"] == m), math.nan)
+            if mm != mt or key not in done:
+                continue
+            e = sum(v) / len(v)
+            xb.append(sb)
+            xd.append(_num(done[key]))
+            ys.append(e)
+            per.setdefault(cls, []).append((_num(done[key]), e))
+        rb = spearmanr(xb, ys) if len(ys) > 2 else None
+        rd = spearmanr(xd, ys) if len(ys) > 2 else None
+        within = [spearmanr(*zip(*v)).statistic for v in per.values()
+                  if len(v) > 2 and len({a for a, _ in v}) > 1 and len({b for _, b in v}) > 1]
+        lines.append(f"| {mt} | {_f(rb.statistic if rb else None)} (p = {_f(rb.pvalue if rb else None)}) | "
+                     f"{_f(rd.statistic if rd else None)} (p = {_f(rd.pvalue if rd else None)}) | {len(ys)} | "
+                     f"{_f(sum(within) / len(within) if within else None)} |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset", nargs="?")
@@ -165,6 +227,8 @@ def main() -> None:
     ap.add_argument("--out", default="evaluation")
     ap.add_argument("--dense-check", default=None, metavar="DATASET_DIR",
                     help="also compare the dense extension methods on cat0 -> cat1")
+    ap.add_argument("--dense-scores", default=None, metavar="DATASET_DIR",
+                    help="also score every landmark set with dense targets and correlate with the error")
     ap.add_argument("--note", default=None, help="a Markdown file appended to the section (analysis)")
     ap.add_argument("--no-write", action="store_true", help="print only; leave RESULTS.md alone")
     a = ap.parse_args()
@@ -186,6 +250,8 @@ def main() -> None:
     text = summarise(data, wall or sum(data["seconds"].values()))
     if a.note:
         text += "\n\n" + Path(a.note).read_text().strip()
+    if a.dense_scores:
+        text += "\n\n" + dense_scores(data, Path(a.dense_scores), out)
     if a.dense_check:
         text += "\n\n" + dense_table(Path(a.dense_check))
     print(text)
