@@ -216,6 +216,38 @@ def dense_scores(data: dict, dataset: Path, out: Path, effort: str = "quick") ->
     return "\n".join(lines)
 
 
+def spread_table(data: dict, dataset: Path) -> str:
+    """How spread out each method's landmarks are: the median geodesic distance from a
+    landmark to its nearest other landmark, in diameters (1 = the shape's diameter), beside
+    the sampling's covering radius r.  CNBS on the bijection score fixes swaps of adjacent
+    samples once the mirror is broken, so its landmarks come in clusters of neighbours."""
+    import numpy as np
+
+    from shapecond.matching.evaluation import class_shapes
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
+
+    st = data["settings"]
+    methods = st["methods"]
+    lines = ["### Landmark spread (all landmarks, null shape)", "",
+             "Median over landmarks of the geodesic distance to the nearest other landmark, in "
+             "diameters; r = covering radius of the N samples.", "",
+             "| class | L | r | " + " | ".join(methods) + " |", "|---|---|---|" + "---|" * len(methods)]
+    sets = {(d["cls"], d["method"]): d["ids"] for d in data["landmarks"]}
+    for cls in [c for c in PAPER_ORDER if c in st["classes"]] + [c for c in st["classes"] if c not in PAPER_ORDER]:
+        g = load_geometry(class_shapes(Path(dataset) / cls)[0])
+        shape = metric_shape(g, st["n_points"], backend=st["backend"], seed=st["seed"])
+        cells = []
+        for m in methods:
+            idx = shape.landmark_indices(sets[(cls, m)])
+            S = shape.D[np.ix_(idx, idx)].copy()
+            np.fill_diagonal(S, np.inf)
+            cells.append(f"{np.median(S.min(axis=1)):.3f}")
+        r = shape.covering_radius
+        lines.append(f"| {cls} | {len(sets[(cls, methods[0])])} | {_f(r)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset", nargs="?")
@@ -227,6 +259,8 @@ def main() -> None:
     ap.add_argument("--out", default="evaluation")
     ap.add_argument("--dense-check", default=None, metavar="DATASET_DIR",
                     help="also compare the dense extension methods on cat0 -> cat1")
+    ap.add_argument("--spread", default=None, metavar="DATASET_DIR",
+                    help="also tabulate how clustered each method's landmarks are")
     ap.add_argument("--dense-scores", default=None, metavar="DATASET_DIR",
                     help="also score every landmark set with dense targets and correlate with the error")
     ap.add_argument("--note", default=None, help="a Markdown file appended to the section (analysis)")
@@ -250,6 +284,8 @@ def main() -> None:
     text = summarise(data, wall or sum(data["seconds"].values()))
     if a.note:
         text += "\n\n" + Path(a.note).read_text().strip()
+    if a.spread:
+        text += "\n\n" + spread_table(data, Path(a.spread))
     if a.dense_scores:
         text += "\n\n" + dense_scores(data, Path(a.dense_scores), out)
     if a.dense_check:
