@@ -104,8 +104,8 @@ def markdown(ev, plots=()) -> str:
            "Timings (s): " + ", ".join(f"{k} {v:.0f}" for k, v in ev.seconds.items()), ""]
     floors = score_table(ev.landmarks, "floor")
     out += ["## Symmetry score after 1, 3 and all landmarks (Figure 7a)", "",
-            "σ lower bounds with the landmarks fixed (CNBS: its own selection scores; the other "
-            "methods: a quick witness search). `*` marks a value equal to the best single swap "
+            "σ lower bounds with the landmarks fixed, every method scored by the same quick witness "
+            "search (CNBS's own heat-map values are not used, so one estimator is compared). `*` marks a value equal to the best single swap "
             "avoiding the landmarks (the floor): there the score does not see the landmarks.", "",
             "| class | L | " + " | ".join(f"{m} 1 / 3 / L" for m in methods) + " |",
             "|---|---|" + "---|" * len(methods)]
