@@ -158,3 +158,67 @@ def test_pruned_heat_map_never_returns_a_pruned_argmin(max_verify):
         hm = heat_map(D, 18, seed=0, prune=True, max_verify=max_verify)
         c = hm.argmin()
         assert not hm.pruned[c] and c in hm.results
+
+
+def _global_sigma_brute(D, n, fixed, min_d2):
+    """max σ over bijections fixing ``fixed`` whose d² >= min_d2 (enumeration), 0 if none."""
+    import itertools
+
+    from shapecond.symmetry.objective import d2
+
+    free = [x for x in range(n) if x not in fixed]
+    best = 0.0
+    for perm in itertools.permutations(free):
+        t = np.arange(n)
+        t[free] = perm
+        if d2(D, t) >= min_d2 and d2(D, t) > 0:
+            best = max(best, map_score(D, t))
+    return best
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_global_heat_map_is_a_lower_bound_over_global_maps(seed):
+    """Resolution-aware mode: every value is σ of a global map fixing p, <= the brute-force
+    sup over global maps; swaps of close samples (d² below the floor) never count."""
+    n = 7
+    D = near_symmetric(n, 80 + seed)
+    rms = 0.3  # RMS displacement floor: excludes most single swaps at n = 7
+    min_d2 = n * rms**2
+    hm = heat_map(D, n, seed=0, min_displacement=rms, prune=True)
+    for p in range(n):
+        exact = _global_sigma_brute(D, n, [p], min_d2)
+        assert hm.values[p] <= exact * (1 + 1e-9) + 1e-12
+        r = hm.results.get(p)
+        if r is not None and hm.values[p] == r.sigma and hm.values[p] > 0:
+            w = r.witness
+            assert w[p] == p and np.sum(D[np.arange(n), w] ** 2) >= min_d2 * (1 - 1e-12)
+
+
+def test_global_cnbs_falls_back_to_farthest_points_when_nothing_is_global():
+    """No map moves the samples that far: scores 0 and the landmarks are farthest-point steps."""
+    n = 9
+    D = near_symmetric(n, 5)
+    out = cnbs_landmarks(D, n, 3, min_displacement=10.0)
+    assert out["scores"] == [0.0, 0.0, 0.0] and out["initial_score"] == 0.0
+    L = out["landmarks"]
+    assert L[0] == 0
+    assert L[1] == int(np.argmax(D[0, :n]))
+    rest = [p for p in range(n) if p not in L[:2]]
+    assert L[2] == rest[int(np.argmax(D[np.ix_(rest, L[:2])].min(axis=1)))]
+
+
+def test_cnbs_global_on_the_animal_spreads_its_landmarks():
+    """Generated animal (N = 100): first landmark off the mirror plane, and no two of five
+    landmarks are adjacent samples (nearest other landmark > 2 covering radii)."""
+    from shapecond.landmarks import select_landmarks, sample_spacing
+    from shapecond.shapes.metric import metric_shape
+    from shapecond.shapes.synthetic import animal
+
+    g = animal(delta=0.05)
+    shape = metric_shape(g, n_points=100, cache=False)
+    res = select_landmarks(shape, 5, "cnbs-global", seed=0)
+    idx = list(res.sample_indices)
+    assert abs(g.vertices[shape.samples[idx[0]], 0]) > 1e-9
+    S = shape.D[np.ix_(idx, idx)].copy()
+    np.fill_diagonal(S, np.inf)
+    assert S.min() > 2 * sample_spacing(shape)
