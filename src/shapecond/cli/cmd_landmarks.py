@@ -70,7 +70,7 @@ def command(input_spec, k, method, user_landmarks, scores, effort, png, ply, up,
     kw = {}
     if method == "user":
         kw["ids"] = user_ids
-    if method in ("cnbs", "cnbs-global") and progress_enabled():
+    if method == "cnbs" and progress_enabled():
         kw["progress"] = lambda step, done, total: click.echo(
             f"\rlandmark {step + 1}/{k}: heat map {done}/{total}", err=True, nl=done == total)
     result = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **kw)

@@ -4,9 +4,6 @@
 ``MetricShape`` and reports them in order with the global symmetry score after each:
 
 * ``"cnbs"``: Condition Number Based Sampling on the global score (``cnbs``);
-* ``"cnbs-global"``: CNBS counting only global maps, those moving the samples by at
-  least ``GLOBAL_RADII`` covering radii (RMS), so that swaps of adjacent samples at
-  thin tips do not attract the landmarks (``cnbs``, "Resolution-aware CNBS");
 * ``"cnbs-local"``: CNBS on the local score of deformation-based matching
   (``shapecond.deformation.heatmap``; its scores are local scores σ_∞, landmarks are
   mesh vertices, not necessarily samples);
@@ -20,28 +17,10 @@ from __future__ import annotations
 
 import time
 
-import numpy as np
-
 from ..errors import InputError
 from .result import LandmarkResult, make_result, sample_of_vertex
 
-METHODS = ("cnbs", "cnbs-global", "cnbs-local", "fps", "pls", "hks", "user")
-#: cnbs-global: witnesses must move the samples by at least this many covering radii
-#: (RMS), as for the "symmetric within resolution" flag of ``symmetry.resolution``.
-GLOBAL_RADII = 3.0
-
-
-def sample_spacing(shape) -> float:
-    """The covering radius r of the samples, or (a matrix input, where it is unknown)
-    the median distance from a sample to its nearest other sample, which FPS keeps at
-    about r."""
-    r = getattr(shape, "covering_radius", None)
-    if r is not None and r > 0:
-        return float(r)
-    n = int(shape.n_samples)
-    Dx = np.array(shape.D[:n, :n], dtype=float)
-    np.fill_diagonal(Dx, np.inf)
-    return float(np.median(Dx.min(axis=1)))
+METHODS = ("cnbs", "cnbs-local", "fps", "pls", "hks", "user")
 
 
 def prefix_scores(shape, sample_indices, fixed=(), seed: int = 0, effort: str = "default") -> list[float]:
@@ -88,12 +67,11 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     method : one of ``METHODS``.
     seed : int, for every random choice (FPS start, search starts).
     scores : compute σ after each landmark for the baselines (k witness searches);
-        default True for "cnbs" and "cnbs-global" (free: the heat map gives them; for
-        cnbs-global they are σ over global maps), False otherwise.
+        default True for "cnbs" (free: the heat map gives them), False otherwise.
     effort : effort of the witness searches ("quick", "default", "thorough").
     fixed : sample indices fixed before selection (they are not reported again).
-    **kw : method options: cnbs and cnbs-global (``resolve_fraction``, ``resolve``, ``n_maps``,
-        ``progress``, ``keep_heat_maps``; cnbs-global also ``min_displacement``), cnbs-local (``alpha``, ``energy``, ``refine``),
+    **kw : method options: cnbs (``resolve_fraction``, ``resolve``, ``n_maps``,
+        ``progress``, ``keep_heat_maps``), cnbs-local (``alpha``, ``energy``, ``refine``),
         hks (``time_fraction``, ``n_eigs``),
         user (``ids`` or ``path``).
 
@@ -108,11 +86,9 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
         raise InputError(f"k must lie between 1 and {n - len(fixed) - 1} for {n} samples, got {k}")
     t0 = time.perf_counter()
     initial, heat_maps, sc = None, (), None
-    if method in ("cnbs", "cnbs-global"):
+    if method == "cnbs":
         from .cnbs import cnbs_landmarks
 
-        if method == "cnbs-global":
-            kw.setdefault("min_displacement", GLOBAL_RADII * sample_spacing(shape))
         out = cnbs_landmarks(shape.D, n, k, fixed=fixed, seed=seed, effort=effort, **kw)
         chosen, sc, initial = out["landmarks"], out["scores"], out["initial_score"]
         heat_maps = tuple(out["heat_maps"])
@@ -146,4 +122,4 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps)
 
 
-__all__ = ["GLOBAL_RADII", "LandmarkResult", "METHODS", "prefix_scores", "sample_spacing", "select_landmarks"]
+__all__ = ["LandmarkResult", "METHODS", "prefix_scores", "select_landmarks"]

@@ -48,18 +48,6 @@ heat map is a lower bound per candidate, assembled as in DESIGN.md 3:
    On cat0 at N = 400 this cut 15 landmarks from 490 s to about 75 s of CPU
    (benchmarks/RESULTS.md).
 
-**Resolution-aware CNBS** (``min_displacement`` > 0; ``select_landmarks(..., "cnbs-global")``,
-our extension, not the paper).  Once one to three landmarks break the mirror, the
-paper's σ on TOSCA is dominated by swaps of two adjacent samples at thin tips, and greedy
-CNBS spends its landmarks fixing them: they cluster (benchmarks/RESULTS.md, section
-"evaluate").  Such maps are ambiguities below the sampling resolution, not ones a matcher
-must resolve.  Here only *global* maps count as witnesses, those whose RMS displacement
-sqrt(d²/N) is at least ``min_displacement`` (3 covering radii by default, the test of
-``symmetry.resolution``): the compiled local search treats other maps as infeasible
-(``_kernels.local_search``'s ``min_d2``), base and verification results keep only their
-global maps, the swap floor counts only swaps that far apart.  When no global map is
-left, the next landmark is a farthest-point step.
-
 Ties (all heat values inf on an exactly symmetric shape, for instance) are broken by
 the larger move, then the smaller index.  Everything is deterministic given ``seed``.
 """
@@ -181,27 +169,10 @@ def _maps_of(res, n_maps):
     return [np.asarray(m, dtype=np.int64) for m in maps[:n_maps]]
 
 
-def _global_result(res, D, n, min_d2):
-    """``res`` restricted to its global maps (d² >= ``min_d2``), best first; None if none."""
-    if res is None or min_d2 <= 0.0:
-        return res
-    from ..symmetry import objective as obj
-
-    maps = _maps_of(res, len(getattr(res, "maps", None) or ()) or 1)
-    sigmas = list(getattr(res, "sigmas", None) or [res.sigma])
-    keep = [(s, t) for s, t in zip(sigmas, maps) if obj.d2(D, t) >= min_d2]
-    if not keep:
-        return None
-    s0, t0 = keep[0]
-    return _search_module().SearchResult(sigma=float(s0), witness=t0, d2=obj.d2(D, t0), dist2=obj.dist2(D, t0),
-                                         maps=tuple(t for _, t in keep), sigmas=tuple(s for s, _ in keep),
-                                         seconds=getattr(res, "seconds", 0.0))
-
-
 def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: str = "default",
              n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
              resolve: str = "ils", n_kicks: int = N_KICKS, n_cross: int = 24, max_verify: int = 8,
-             prune: bool = False, min_displacement: float = 0.0, progress=None) -> HeatMap:
+             prune: bool = False, progress=None) -> HeatMap:
     """The CNBS heat map: σ (lower bound) with each candidate sample fixed.
 
     Parameters
@@ -217,9 +188,6 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     prune : stop each candidate's search once its value passes the incumbent (step 6 of
         the module docstring): the same argmin for a fraction of the work, but the
         values of the ``pruned`` candidates are weaker lower bounds.  Off for pictures.
-    min_displacement : only *global* maps count as witnesses, those whose RMS
-        displacement sqrt(d²/N) is at least this (in units of D; 0: every map, the
-        paper's σ).  See "Resolution-aware CNBS" in the module docstring.
     progress : callable(done, total) or None.
     """
     t0 = time.perf_counter()
@@ -233,14 +201,10 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         raise InputError(f"resolve must be 'ils' or 'full', got {resolve!r}")
     if not 0.0 <= resolve_fraction <= 1.0:
         raise InputError("resolve fraction must lie in [0, 1]")
-    if min_displacement < 0.0 or not math.isfinite(min_displacement):
-        raise InputError("the minimum displacement must be a finite number >= 0")
-    min_d2 = n * float(min_displacement) ** 2
     if base is None:
         base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
-    base = _global_result(base, D, n, min_d2)
-    sigma0 = float(base.sigma) if base is not None else 0.0
-    maps = _maps_of(base, n_maps) if base is not None else []
+    sigma0 = float(base.sigma)
+    maps = _maps_of(base, n_maps)
     cand = np.array([p for p in range(n) if p not in set(L)], dtype=np.int64)
     if cand.size == 0:
         raise InputError("every sample is already a landmark")
@@ -248,14 +212,11 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     moved = np.zeros(n)
     for t in maps:
         moved = np.maximum(moved, D[np.arange(n), t])
-    S = swap_scores(D, n)
-    if min_d2 > 0.0:
-        S[2.0 * D[:n, :n] ** 2 < min_d2] = 0.0  # a swap moves RMS D[a,b] sqrt(2/N)
     floor = np.zeros(n)
-    floor[cand] = best_swap_avoiding(S, L, cand)
+    floor[cand] = best_swap_avoiding(swap_scores(D, n), L, cand)
     results = {}
-    best_t = maps[0] if maps else np.arange(n, dtype=np.int64)
-    polish = WarmPolisher(D, n, maps, L, min_d2)
+    best_t = maps[0]
+    polish = WarmPolisher(D, n, maps, L)
     n_full = int(math.ceil(resolve_fraction * cand.size))
     order = cand[np.lexsort((cand, -moved[cand]))]  # the tie-break order of HeatMap.argmin
     to_resolve = np.zeros(n, dtype=bool)
@@ -274,8 +235,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         """Steps 1, 2 and 4 for candidate p; True when cut short above ``stop``."""
         if best_t[p] == p:
             values[p] = max(sigma0, floor[p])
-            if base is not None:
-                results[p] = base
+            results[p] = base
             return False
         if stop < math.inf and floor[p] >= stop:
             return True  # its floor alone ties or beats the incumbent, which comes first
@@ -284,8 +244,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         if cut or not to_resolve[p]:
             return cut
         if resolve == "full":
-            r = _global_result(search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed,
-                                                     effort=effort), D, n, min_d2)
+            r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort)
         else:  # "ils": kicked copies of the repaired base maps, polished
             r, cut = polish.bounded(L + [p], p, rng=rng, n_kicks=n_kicks, stop=stop)
         resolved[p] = True
@@ -327,10 +286,9 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         r = polish(L + [c], c, extra_starts=starts)
         if resolve == "full" or n <= FULL_VERIFY_N:
             own = [results[c].witness] if c in results else []
-            r2 = _global_result(search.witness_search(D, n_samples=n, landmarks=L + [c], seed=seed,
-                                                      starts=own, effort=effort), D, n, min_d2)
-            if r2 is not None and (r is None or float(r2.sigma) > float(r.sigma)):
-                r = r2
+            r2 = search.witness_search(D, n_samples=n, landmarks=L + [c], seed=seed, starts=own,
+                                       effort=effort)
+            r = r2 if r is None or float(r2.sigma) > float(r.sigma) else r
         if r is not None and float(r.sigma) > values[c]:
             values[c] = float(r.sigma)
             results[c] = r
@@ -366,20 +324,14 @@ def _swap_witness(D, n, L, base):
 
 def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
                    n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
-                   resolve: str = "ils", prune: bool = True, min_displacement: float = 0.0, progress=None,
-                   keep_heat_maps: bool = False):
+                   resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False):
     """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
-
-    With ``min_displacement`` > 0 only global maps count (``heat_map``); once no global
-    map is left (every value 0) the next landmark is the candidate farthest from the
-    landmarks so far (a farthest-point step; sample 0, the FPS start, when there are none).
 
     Returns
     -------
     dict with ``landmarks`` (new sample indices in order), ``scores`` (σ lower bound
     after each), ``initial_score`` (σ with only ``fixed``), ``heat_maps`` (list of
-    HeatMap when ``keep_heat_maps``), ``witness`` (final witness map, None when no
-    global map is left).
+    HeatMap when ``keep_heat_maps``), ``witness`` (final witness map).
     """
     search = _search_module()
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
@@ -387,29 +339,18 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
     L = [int(v) for v in fixed]
     if k < 0 or k + len(L) > n:
         raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(L)} already fixed)")
-    glob = min_displacement > 0.0
-    min_d2 = n * float(min_displacement) ** 2
     base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
-    if glob:
-        base = _global_result(base, D, n, min_d2)
-    initial = float(base.sigma) if base is not None else 0.0
+    initial = float(base.sigma)
     new, scores, maps = [], [], []
     for step in range(k):
         hm = heat_map(D, n, L, base=base, seed=seed, effort=effort, n_maps=n_maps,
                       resolve_fraction=resolve_fraction, resolve=resolve, prune=prune,
-                      min_displacement=min_displacement,
                       progress=(lambda d, t, s=step: progress(s, d, t)) if progress else None)
         c = hm.argmin()
-        if glob and not hm.values[c] > 0.0:  # no global map left: a farthest-point step
-            cand = np.array([p for p in range(n) if p not in set(L)], dtype=np.int64)
-            c = int(cand[np.argmax(D[np.ix_(cand, L)].min(axis=1))]) if L else int(cand[0])
         new.append(c)
         scores.append(float(hm.values[c]))
         prev, base = base, hm.results.get(c)
-        if glob:
-            if base is None or float(base.sigma) < hm.values[c]:
-                base = None  # the next heat map starts from a fresh search
-        elif base is None or float(base.sigma) < hm.values[c]:
+        if base is None or float(base.sigma) < hm.values[c]:
             # the single-swap floor won: continue from a witness that attains it
             base = _swap_witness(D, n, L + [c], base or prev)
         L.append(c)
@@ -418,4 +359,4 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
         else:
             hm.results.clear()
     return {"landmarks": new, "scores": scores, "initial_score": initial, "heat_maps": maps,
-            "witness": None if base is None else np.asarray(base.witness)}
+            "witness": np.asarray(base.witness)}

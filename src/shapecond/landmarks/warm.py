@@ -34,14 +34,13 @@ class WarmPolisher:
     the dense-target neighbour lists) and ``MapPool``.
     """
 
-    def __init__(self, D, n, maps, landmarks=(), min_d2=0.0):
+    def __init__(self, D, n, maps, landmarks=()):
         from ..symmetry import _kernels as K
         from ..symmetry import objective as obj
 
         self.K, self.obj, self.search = K, obj, _search_module()
         self.D = np.ascontiguousarray(np.asarray(D, dtype=np.float64))
         self.n = n = int(n)
-        self.min_d2 = float(min_d2)  # global maps only (d² >= min_d2); 0: every map
         m = self.D.shape[0]
         allfree = np.arange(n, dtype=np.int64)
         if m > n:
@@ -63,9 +62,9 @@ class WarmPolisher:
             used[t] = True
             d2v, dist2v, _ = K.local_search(self.D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0,
                                             obj.d2(self.D, t), obj.dist2(self.D, t), self.floor, 50 * n,
-                                            np.inf, self.min_d2)
+                                            np.inf)
             key = t.tobytes()
-            if key not in seen and d2v >= self.min_d2:
+            if key not in seen:
                 seen.add(key)
                 self.base.append((t, G, H, d2v, dist2v))
 
@@ -114,15 +113,13 @@ class WarmPolisher:
         found = {}  # map bytes -> (tracked ratio d²/Dist², map)
 
         def keep(t, d2v, dist2v):
-            if d2v < self.min_d2:
-                return False  # not a global map: not a witness in this mode
             r = 0.0 if d2v <= 0.0 else (math.inf if dist2v <= self.floor else d2v / dist2v)
             found.setdefault(t.tobytes(), (r, t))
             return r > stop2
 
         def search(t, G, H, used, d2v, dist2v):
             d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, d2v,
-                                            dist2v, self.floor, 50 * n, stop2, self.min_d2)
+                                            dist2v, self.floor, 50 * n, stop2)
             return keep(t, d2v, dist2v)
 
         jobs = [(b, 0) for b in range(len(self.base))]

@@ -119,17 +119,16 @@ def _rank1(P, PT, c, w):
 
 
 @njit(cache=True)
-def _value(ratio, s, num, den, floor, min_d2):
+def _value(ratio, s, num, den, floor):
     """Objective of one candidate: num / max(den, floor) (σ², the identity and
-    round-off of it scoring -1, and so does a map with d² = num below ``min_d2``,
-    which is not a global map), or num − s·den on a rung of the fixed-s ladder."""
+    round-off of it scoring -1), or num − s·den on a rung of the fixed-s ladder."""
     if ratio:
-        return num / max(den, floor) if (num > 0.0 and num >= min_d2) else -1.0
+        return num / max(den, floor) if num > 0.0 else -1.0
     return num - s * den
 
 
 @njit(cache=True)
-def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_moves, stop, min_d2):
+def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_moves, stop):
     """Best-improvement local search over swaps and nearby reassignments.
 
     Parameters
@@ -149,9 +148,6 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
         ``stop`` (``np.inf``: never).  The value only grows during the search, so a
         caller looking for a minimum over several searches (the CNBS heat map's
         argmin) learns all it needs once a search passes the incumbent.
-    min_d2 : in ``MODE_RATIO``, maps with d² below it score -1 (infeasible): the
-        search stays among *global* maps, whose RMS displacement is at least
-        sqrt(min_d2 / n) (``cnbs``'s resolution-aware mode); 0 for the paper's σ.
 
     Returns
     -------
@@ -182,7 +178,7 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
     buf = np.empty(n)
     ratio = mode == MODE_RATIO
     while moves < max_moves:
-        cur = _value(ratio, s, d2, dist2, floor, min_d2)
+        cur = _value(ratio, s, d2, dist2, floor)
         if ratio and cur > stop:
             break
         best = cur + 1e-12 * abs(cur)
@@ -203,7 +199,7 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
                 dba = DcT[a, b]
                 nd2 = b2 + dab * dab + dba * dba - dd[b]
                 nds = dist2 - 4.0 * (P[a, b] + PT[a, b] - pd[b] + 2.0 * D[a, b] * Di[a, b]) + 2.0 * bS
-                v = _value(ratio, s, nd2, nds, floor, min_d2)
+                v = _value(ratio, s, nd2, nds, floor)
                 buf[b] = v if isfree[b] else -np.inf
             for b in range(a + 1, n):
                 if buf[b] > best:
@@ -220,7 +216,7 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
                 dS = 2.0 * (G[a, y] - pd[a])
                 dty = D[ta, y]
                 nds = dist2 + 2.0 * (H[y] - dty * dty - H[ta]) - 2.0 * dS
-                v = _value(ratio, s, nd2, nds, floor, min_d2)
+                v = _value(ratio, s, nd2, nds, floor)
                 if v > best:
                     best = v
                     kind = 1

@@ -166,7 +166,7 @@ class SearchStage:
         used[t] = True
         cap = 50 * n if max_moves is None else max_moves
         K.local_search(D, n, t, G, H, self.free, self.knn, used, mode, float(s),
-                       obj.d2(D, t), obj.dist2(D, t), self.floor, cap, np.inf, 0.0)
+                       obj.d2(D, t), obj.dist2(D, t), self.floor, cap, np.inf)
         return t
 
 
