@@ -138,7 +138,7 @@ class HeatMap:
     ``values[p]`` is nan for p in ``landmarks`` (not a candidate); ``results[p]`` is
     the search result whose witness attains the warm/full part of ``values[p]``;
     ``pruned[p]`` is True where the search stopped early above the argmin's value
-    (``heat_map(prune=True)``; None when not pruned).
+    (``heat_map(prune=True)``; all False without pruning).
     """
 
     values: np.ndarray
