@@ -35,17 +35,22 @@ def _f(v):
     return "inf" if math.isinf(v) else ("-" if math.isnan(v) else f"{v:.3g}")
 
 
-def summarise(data: dict, wall: float | None) -> str:
-    st = data["settings"]
-    classes = [c for c in PAPER_ORDER if c in st["classes"]] + \
-        [c for c in st["classes"] if c not in PAPER_ORDER]
-    methods, matchers = st["methods"], st["matchers"]
+def _tables(data: dict):
+    """(scores, err): {(class, method): {count: σ}} and {(class, method, count, matcher): mean error}."""
     scores = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d["scores"].items()}
               for d in data["landmarks"]}
     errs = {}
     for r in data["records"]:
         errs.setdefault((r["cls"], r["method"], r["n_landmarks"], r["matcher"]), []).append(r["error"])
-    err = {k: sum(v) / len(v) for k, v in errs.items()}
+    return scores, {k: sum(v) / len(v) for k, v in errs.items()}
+
+
+def summarise(data: dict, wall: float | None) -> str:
+    st = data["settings"]
+    classes = [c for c in PAPER_ORDER if c in st["classes"]] + \
+        [c for c in st["classes"] if c not in PAPER_ORDER]
+    methods, matchers = st["methods"], st["matchers"]
+    scores, err = _tables(data)
     L = st["landmark_counts"]
     lines = ["## Figure 7 evaluation on TOSCA (issue 7)", "",
              f"Machine: {machine()}. Command: `{command_line()}`, summarising the run "
@@ -184,9 +189,7 @@ def dense_scores(data: dict, dataset: Path, out: Path, effort: str = "quick") ->
             r = witness_search(shape.D, shape.n_samples, [int(i) for i in idx], seed=st["seed"], effort=effort)
             done[f"{cls}/{d['method']}/{c}"] = "inf" if math.isinf(r.sigma) else r.sigma
             path.write_text(json.dumps(done, indent=1))
-    errs = {}
-    for r in data["records"]:
-        errs.setdefault((r["cls"], r["method"], r["n_landmarks"], r["matcher"]), []).append(r["error"])
+    scores, err = _tables(data)
     lines = [f"### Dense-target score against error (N = {st['n_points']}, M = 8N, {effort} search)", "",
              "The same landmark sets scored with dense targets (maps may send a sample to any of 8N "
              "points, so a swap of two neighbouring samples no longer dominates); cells are (class, "
@@ -195,14 +198,11 @@ def dense_scores(data: dict, dataset: Path, out: Path, effort: str = "quick") ->
              "|---|---|---|---|---|"]
     for mt in st["matchers"]:
         xb, xd, ys, per = [], [], [], {}
-        for (cls, m, c, mm), v in errs.items():
+        for (cls, m, c, mm), e in err.items():
             key = f"{cls}/{m}/{c}"
-            sb = next((_num(d["scores"].get(str(c), d["scores"].get(c))) for d in data["landmarks"]
-                       if d["cls"] == cls and d["method"] == m), math.nan)
             if mm != mt or key not in done:
                 continue
-            e = sum(v) / len(v)
-            xb.append(sb)
+            xb.append(scores.get((cls, m), {}).get(c, math.nan))
             xd.append(_num(done[key]))
             ys.append(e)
             per.setdefault(cls, []).append((_num(done[key]), e))

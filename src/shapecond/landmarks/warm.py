@@ -107,7 +107,7 @@ class WarmPolisher:
         """
         K, obj, D, n = self.K, self.obj, self.D, self.n
         m = D.shape[0]
-        stop2 = stop * stop if stop < math.inf else np.inf
+        stop2 = stop * stop  # the search compares σ² (inf stays inf)
         lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
         free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
         found = {}  # map bytes -> (tracked ratio d²/Dist², map)
