@@ -107,9 +107,11 @@ class CachedSolver:
     method's factorisation is made once and shared landmarks are solved once.
     """
 
-    def __init__(self, geometry: Geometry, backend: str = "heat"):
+    def __init__(self, geometry: Geometry, backend: str = "heat", known: "SampledSurface | None" = None):
         self.geometry, self.backend, self.n = geometry, backend, geometry.n_vertices
         self._solver, self._rows = None, {}
+        if known is not None:  # rows already computed (a sampled surface of the same geometry)
+            self._rows.update({int(s): r for s, r in zip(known.samples, known.rows)})
 
     def distances(self, sources):
         sources = [int(s) for s in np.atleast_1d(sources)]
@@ -168,6 +170,73 @@ def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat
     if cache:
         _save(path, surf)
     return surf
+
+
+def surface_at(geometry: Geometry, vertices, backend: str = "heat", cache: bool = True,
+               solver: DistanceSolver | None = None) -> SampledSurface:
+    """The surface sampled at given vertices (in that order), with their distance rows.
+
+    No FPS: one geodesic solve per vertex, cached on disk like ``sample_surface``
+    (the key holds the vertices).  Used to carry one shape's samples to another
+    shape with the same vertex order (``carry_samples``).
+    """
+    vertices = np.asarray(vertices, dtype=np.int64).reshape(-1)
+    if vertices.size and (vertices.min() < 0 or vertices.max() >= geometry.n_vertices):
+        raise InputError(f"sample vertex out of range 0..{geometry.n_vertices - 1} on {geometry.name}")
+    key = _key(geometry, int(vertices.size), backend, -1, ("at",) + tuple(vertices.tolist()))
+    path = Path(cache_dir()) / f"matching-{key}.npz"
+    if cache and path.exists():
+        try:
+            with np.load(path) as z:
+                if np.array_equal(z["samples"], vertices):
+                    return SampledSurface(geometry, z["samples"], z["rows"], float(z["unit"]), backend)
+        except Exception:
+            path.unlink(missing_ok=True)
+    solver = solver if solver is not None else DistanceSolver(geometry, backend)
+    rows = solver.distances(vertices).astype(np.float32)
+    surf = SampledSurface(geometry, vertices, rows, surface_unit(geometry, float(rows.max())), backend)
+    if cache:
+        _save(path, surf)
+    return surf
+
+
+def carry_samples(source: SampledSurface, target: Geometry, solver=None, seed: int = 0,
+                  shuffle: bool = True):
+    """The source's samples carried to ``target`` by vertex id: the *corresponding* protocol.
+
+    The condition number (paper Eq. 4) compares a shape X with a perturbation X̃ of
+    the same points, so matching the samples of ``source`` to the same vertices of a
+    deformed ``target`` (same vertex count and ids) measures exactly that: the true
+    map is known sample by sample and no discretisation error enters.  The target's
+    samples are put in a seeded random order so that no matcher can profit from the
+    sample order.
+
+    Parameters
+    ----------
+    source : SampledSurface
+    target : Geometry with the same vertex ids as ``source.geometry``.
+    solver : optional distance solver of ``target`` (e.g. a ``CachedSolver``).
+    seed : seed of the shuffle.
+    shuffle : False keeps the source's order (truth = identity).
+
+    Returns
+    -------
+    (SampledSurface, truth) with ``truth[x]`` the target sample holding source sample
+    ``x``'s vertex.
+    """
+    g = source.geometry
+    if g.n_vertices != target.n_vertices or not np.array_equal(g.ids, target.ids):
+        raise InputError(f"{target.name} has {target.n_vertices} vertices but {g.name} has "
+                         f"{g.n_vertices}: corresponding samples need the same vertex count and order")
+    n = source.n_samples
+    perm = np.random.default_rng(seed).permutation(n) if shuffle else np.arange(n)
+    vertices = source.samples[perm]
+    solver = solver if solver is not None else DistanceSolver(target, source.backend)
+    rows = np.asarray(solver.distances(vertices), dtype=np.float32)
+    surf = SampledSurface(target, vertices, rows, surface_unit(target, float(rows.max())), source.backend)
+    truth = np.empty(n, dtype=np.int64)
+    truth[perm] = np.arange(n)
+    return surf, truth
 
 
 def _save(path: Path, surf: SampledSurface) -> None:
