@@ -73,7 +73,9 @@ def test_affinity_matrix_matches_definition():
     for a in range(cand.size):
         for b in range(cand.size):
             x, y, x2, y2 = cand.source[a], cand.target[a], cand.source[b], cand.target[b]
-            want = 0.0 if (x == x2 or y == y2) else np.exp(-(Ds[x, x2] - Dt[y, y2]) ** 2 / (2 * s * s))
+            # the biweight of width s: (1 - diff² / (2s)²)² inside |diff| < 2s
+            u = max(0.0, 1.0 - (Ds[x, x2] - Dt[y, y2]) ** 2 / (4 * s * s))
+            want = 0.0 if (x == x2 or y == y2) else u * u
             assert M[a, b] == pytest.approx(want, rel=1e-5, abs=1e-7)
 
 

@@ -6,12 +6,17 @@ Leordeanu–Hebert spectral matching scores every *candidate assignment*
 ``N = 400``), so each source sample keeps only its ``k`` best target samples
 under a descriptor built from the landmarks:
 
-    f(x) = [ D_s[x, l_1], ..., D_s[x, l_L],  w · q_1(D_s[x, :]), ..., w · q_Q(D_s[x, :]) ]
+    f(x) = [ D_s[x, l_1], ..., D_s[x, l_L] ] / sqrt(L)  ⊕  w · [ q_1(D_s[x, :]), ..., q_Q(D_s[x, :]) ]
 
 the geodesic distances to the ``L`` landmarks, followed by ``Q`` quantiles of
 the point's distance distribution (an intrinsic, landmark-free signature that
 keeps the candidate lists useful when only one or two landmarks are given;
-the paper is silent on how LH05 candidates were chosen).  The target
+the paper is silent on how LH05 candidates were chosen).  The landmark part
+is divided by ``sqrt(L)`` so that its share of the descriptor distance is an
+RMS over the landmarks, the same whatever their number: unscaled, 16
+landmarks clustered at the limb tips of TOSCA michael swamped the intrinsic
+part, and FAQ started from that descriptor erred 4.9 % instead of 1.3 % with
+3 of them (a correct landmark must not cost accuracy).  The target
 descriptor uses the corresponding target landmarks, and candidates are the
 ``k`` target samples nearest in Euclidean descriptor distance.  Landmark
 samples are fixed: their only candidate is their own landmark image, and no
@@ -83,7 +88,7 @@ def check_landmarks(n_source: int, n_target: int, landmarks_source, landmarks_ta
 def descriptors(D: np.ndarray, landmarks: np.ndarray, quantile_weight: float = 0.5) -> np.ndarray:
     """Landmark-distance descriptors ``f(x)`` (module docstring), shape (N, L + Q)."""
     D = np.asarray(D, dtype=np.float64)
-    parts = [D[:, landmarks]]
+    parts = [D[:, landmarks] / np.sqrt(max(len(landmarks), 1))]
     if quantile_weight > 0:
         parts.append(quantile_weight * np.quantile(D, QUANTILE_LEVELS, axis=1).T)
     return np.hstack(parts)
@@ -138,6 +143,26 @@ def k_best_candidates(D_source, D_target, landmarks_source, landmarks_target, k:
     tgt = np.concatenate([lt, free_t[best].reshape(-1)])
     c = np.concatenate([np.zeros(ls.size), np.take_along_axis(sub, best, 1).reshape(-1)])
     return Candidates(src, tgt, c, ls, lt)
+
+
+def band_candidates(t, knn, landmarks_source, landmarks_target, k: int = 20) -> Candidates:
+    """Candidates iterated from a map: each source sample's image ``t[x]`` and its ``k − 1``
+    nearest target samples (``knn[t[x]]``), landmark images excluded.
+
+    Parameters
+    ----------
+    t : (N_s,) int map, source to target, landmarks on their images.
+    knn : (N_t, ≥ k − 1) int nearest target samples of each target sample.
+    """
+    t = np.asarray(t, dtype=np.int64)
+    ls = np.asarray(landmarks_source, dtype=np.int64).reshape(-1)
+    lt = np.asarray(landmarks_target, dtype=np.int64).reshape(-1)
+    free = np.setdiff1d(np.arange(t.size), ls)
+    band = np.concatenate([t[free, None], np.asarray(knn)[t[free], :max(k - 1, 0)]], axis=1)
+    keep = ~np.isin(band, lt)
+    src = np.concatenate([ls, np.repeat(free, band.shape[1])[keep.ravel()]])
+    tgt = np.concatenate([lt, band.ravel()[keep.ravel()]])
+    return Candidates(src, tgt, np.zeros(src.size), ls, lt)
 
 
 def recall(candidates: Candidates, truth: np.ndarray) -> float:
