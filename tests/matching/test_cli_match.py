@@ -79,3 +79,34 @@ def test_bad_landmarks_give_one_line_errors(files, capsys, ls, lt, needle):
     assert code == 2 and out == ""
     assert err.startswith("error:") and needle in err and err.count("\n") == 1
     assert not (d / "bad.txt").exists()
+
+
+@pytest.mark.parametrize("matcher", ["lh05", "faq"])
+def test_same_ids_samples_report_the_sample_error(files, capsys, matcher):
+    """A bent copy with the same vertex ids: the target is sampled at the source's samples."""
+    d, V, inv = files
+    g = plane_patch(n=21)
+    th = V[:, 0] / 0.4
+    Vb = np.column_stack([0.4 * np.sin(th), V[:, 1], 0.4 * (1 - np.cos(th))])
+    _write_off(d / "bent.off", Vb, g.faces)
+    ls = "0,20,300"
+    code, out, err = run(capsys, "match", d / "src.off", d / "bent.off", "--landmarks-source", ls,
+                         "--landmarks-target", ls, "--samples", "same-ids", "--matcher", matcher,
+                         "--points", 60, "-o", d / f"same-{matcher}.txt", "--json")
+    assert code == 0, err
+    summary = json.loads(out)
+    assert summary["samples"] == "same-ids"
+    assert summary["exact"] == 1.0 and summary["sample_error"] == 0.0
+    m = np.loadtxt(d / f"same-{matcher}.txt", dtype=np.int64)
+    assert np.mean(m == np.arange(len(V))) > 0.9
+    # different target landmarks contradict same-ids; a different vertex count is refused
+    code, _, err = run(capsys, "match", d / "src.off", d / "bent.off", "--landmarks-source", ls,
+                       "--landmarks-target", "0,20,301", "--samples", "same-ids", "--points", 60,
+                       "-o", d / "x.txt")
+    assert code == 2 and "target landmarks must be the source's" in err and err.count("\n") == 1
+    small = plane_patch(n=19)
+    _write_off(d / "small.off", small.vertices, small.faces)
+    code, _, err = run(capsys, "match", d / "src.off", d / "small.off", "--landmarks-source", ls,
+                       "--landmarks-target", ls, "--samples", "same-ids", "--points", 60, "-o", d / "x.txt")
+    assert code == 2 and "do not share their vertex ids" in err and err.count("\n") == 1
+    assert not (d / "x.txt").exists()

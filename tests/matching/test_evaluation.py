@@ -44,22 +44,31 @@ def test_null_shape_is_the_lowest_number(dataset):
 
 
 def test_evaluation_of_an_isometric_class(dataset, tmp_path):
-    ev = evaluate_dataset(dataset, methods=("fps",), matchers=("lh05", "faq"), n_points=60)
-    # 2 targets x counts {3, 10} x 2 matchers
-    assert len(ev.records) == 8
+    ev = evaluate_dataset(dataset, methods=("fps",), matchers=("lh05", "faq"), n_points=60,
+                          protocol="both")
+    # 2 targets x counts {3, 10} x 2 matchers x 2 protocols
+    assert len(ev.records) == 16
     assert {r.n_landmarks for r in ev.records} == {3, 10}
-    # bending is an isometry: errors stay near the sample spacing (~ 10 % of half diameter here)
     for r in ev.records:
-        assert r.error < 15.0, r
         assert r.errors.shape == (60,)
+        if r.protocol == "corresponding":
+            # bending is an isometry and the samples correspond: once landmarks break the
+            # strip's symmetries every sample is matched exactly, by both matchers
+            assert r.error == 0.0 and r.exact == 1.0, r
+        else:  # independent samples: errors near the sample spacing (~ 10 % of half diameter)
+            assert r.error < 15.0, r
+    lh05 = [r for r in ev.records if r.protocol == "corresponding" and r.matcher == "lh05"]
+    assert all(r.recall == 1.0 and r.objective_ratio >= 1 - 1e-9 for r in lh05)
     lm = ev.landmarks[0]
     assert set(lm["scores"]) == {1, 3, 10} and len(lm["ids"]) == 10
     text = markdown(ev)
     assert "| strip | 10 |" in text and "Spearman" in text
+    assert "corresponding samples, matcher lh05" in text and "independent samples, matcher faq" in text
     report = write_report(ev, tmp_path / "out")
-    assert report.exists() and (tmp_path / "out" / "score_vs_error.png").stat().st_size > 1000
+    for prot in ("corresponding", "independent"):
+        assert (tmp_path / "out" / f"score_vs_error_{prot}.png").stat().st_size > 1000
     data = json.loads((tmp_path / "out" / "results.json").read_text())
-    assert len(data["records"]) == 8
+    assert len(data["records"]) == 16 and set(data["correlation_by_protocol"]) == {"corresponding", "independent"}
 
 
 def test_class_with_different_vertex_counts_is_refused(dataset, tmp_path):
@@ -70,6 +79,22 @@ def test_class_with_different_vertex_counts_is_refused(dataset, tmp_path):
     _write_off(tmp_path / "odd" / "odd2.off", g.vertices, g.faces)
     with pytest.raises(InputError, match="different vertex counts"):
         evaluate_dataset(tmp_path, methods=("fps",), n_points=20)
+
+
+def test_class_with_a_different_vertex_order_is_refused(dataset, tmp_path, capsys):
+    """Same vertex count, but one shape leaves a vertex unreferenced: the ids differ."""
+    (tmp_path / "odd").mkdir()
+    (tmp_path / "odd" / "odd0.off").write_bytes((dataset / "strip" / "strip0.off").read_bytes())
+    g = plane_patch(n=19)
+    V = g.vertices * [1.0, 0.55, 0.0]
+    F = g.faces[~np.any(g.faces == 0, axis=1)]  # vertex 0 unreferenced
+    _write_off(tmp_path / "odd" / "odd1.off", V, F)
+    with pytest.raises(SystemExit) as ex:
+        main(["evaluate", str(tmp_path), "--methods", "fps", "--matchers", "faq", "--points", "20",
+              "--out", str(tmp_path / "rep")])
+    _, err = capsys.readouterr()
+    assert ex.value.code == 2 and err.count("\n") == 1, err
+    assert "same vertex count and order" in err
 
 
 def test_unknown_class_and_method_are_input_errors(dataset):

@@ -18,9 +18,9 @@ from pathlib import Path
 import click
 
 from ..errors import InputError
-from ..matching.evaluation import evaluate_dataset
+from ..matching.evaluation import PROTOCOLS, evaluate_dataset
 from ..matching.pipeline import MATCHERS
-from ..matching.report import correlation, write_report
+from ..matching.report import by_protocol, correlations, protocols, write_report
 from .common import emit_json, info, json_option, progress_enabled
 
 DEFAULT_METHODS = "fps,pls,hks,cnbs"
@@ -56,11 +56,15 @@ def _names(text, allowed=None, what="name"):
 @click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
               show_default=True)
 @click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
+@click.option("--protocol", type=click.Choice(PROTOCOLS + ("both",)), default="corresponding",
+              show_default=True,
+              help="corresponding: targets sampled at the null shape's sample vertices (the κ setting); "
+                   "independent: each target sampled by its own FPS; both.")
 @click.option("--scheduler", default=None,
               help="Dask scheduler address (tcp://host:8786): run the tasks on that cluster.")
 @json_option
 def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, points, max_targets,
-            seed, geodesic_backend, no_cache, scheduler, as_json):
+            seed, geodesic_backend, no_cache, protocol, scheduler, as_json):
     """Landmarks on each null shape, matched to the rest of its class; a Markdown report."""
     if jobs < 1:
         raise InputError("--jobs must be at least 1")
@@ -70,12 +74,13 @@ def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, point
                           matchers=_names(matchers, MATCHERS, "matcher"), n_jobs=jobs,
                           scheduler=scheduler, quick=quick, n_points=points, seed=seed,
                           backend=geodesic_backend, cache=not no_cache,
-                          progress=progress_enabled(), max_targets=max_targets)
+                          progress=progress_enabled(), max_targets=max_targets, protocol=protocol)
     report = write_report(ev, out_dir)
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),
-               "correlation": {m: dict(zip(("rho", "p", "n"), correlation(ev, m)))
-                               for m in ev.settings["matchers"]}}
+               "protocols": protocols(ev),
+               "correlation": correlations(by_protocol(ev, protocols(ev)[0])),
+               "correlation_by_protocol": {p: correlations(by_protocol(ev, p)) for p in protocols(ev)}}
     if as_json:
         emit_json(summary)
     else:

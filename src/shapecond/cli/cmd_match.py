@@ -1,6 +1,6 @@
 """``shapecond match SOURCE TARGET --landmarks-source IDS --landmarks-target IDS -o MAP.txt``.
 
-Landmark-guided matching of one pair, **source to target** (issue 7, item 6).
+Landmark-guided matching of one pair, **source to target**.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import click
 import numpy as np
 
 from ..errors import InputError
-from ..matching.pipeline import MATCHERS, match_samples, match_shapes
+from ..matching.pipeline import MATCHERS, SAMPLINGS, match_samples, match_shapes
 from ..shapes.geometry import Geometry
 from ..shapes.io import atomic_write, load_input
 from .common import emit_json, info, json_option, parse_ids
@@ -34,8 +34,15 @@ from .common import emit_json, info, json_option, parse_ids
               show_default=True, help="Geodesic solver.")
 @click.option("--k", "k", type=int, default=20, show_default=True,
               help="lh05: candidate target samples per source sample.")
-@click.option("--rounding", type=click.Choice(["greedy", "assignment"]), default="greedy",
-              show_default=True, help="lh05: the paper's greedy discretisation or a linear assignment.")
+@click.option("--rounding", type=click.Choice(["greedy", "assignment"]), default="assignment",
+              show_default=True, help="lh05: a linear assignment or the paper's greedy discretisation.")
+@click.option("--refine/--no-refine", default=True, show_default=True,
+              help="lh05: refine the rounded map on its own objective, with spectral rounds on candidates "
+                   "iterated from it (--no-refine --rounding greedy: the paper's plain LH05).")
+@click.option("--samples", type=click.Choice(SAMPLINGS), default="fps", show_default=True,
+              help="fps: each shape gets its own farthest-point samples; same-ids: the target is sampled "
+                   "at the source's sample vertices (shapes with a common vertex order; the evaluation's "
+                   "corresponding protocol) and the summary reports the sample map's error.")
 @click.option("--dense", type=click.Choice(["distances", "nearest"]), default="distances",
               show_default=True, help="How the sample map is extended to every source vertex.")
 @click.option("--largest-component", is_flag=True, help="Keep only the largest connected component.")
@@ -44,7 +51,8 @@ from .common import emit_json, info, json_option, parse_ids
               help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
 @json_option
 def command(source, target, landmarks_source, landmarks_target, matcher, points, seed,
-            geodesic_backend, k, rounding, dense, largest_component, no_cache, output, as_json):
+            geodesic_backend, k, rounding, refine, samples, dense, largest_component, no_cache, output,
+            as_json):
     """Match SOURCE to TARGET with corresponding landmarks fixed; write the dense map.
 
     The map file has one line per SOURCE vertex id (0 .. largest id): the id of
@@ -58,12 +66,14 @@ def command(source, target, landmarks_source, landmarks_target, matcher, points,
         raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
     src = load_input(source, largest_component=largest_component)
     tgt = load_input(target, largest_component=largest_component)
-    options = {"k": k, "rounding": rounding} if matcher == "lh05" else {}
+    options = {"k": k, "rounding": rounding, "refine": refine} if matcher == "lh05" else {}
     if isinstance(src, np.ndarray) or isinstance(tgt, np.ndarray):
+        if samples != "fps":
+            raise InputError("--samples same-ids needs two meshes or point clouds, not distance matrices")
         lines, summary = _match_matrices(src, tgt, ids_s, ids_t, matcher, seed, options)
     else:
         lines, summary = _match_geometries(src, tgt, ids_s, ids_t, matcher, points, seed,
-                                           geodesic_backend, dense, not no_cache, options)
+                                           geodesic_backend, dense, not no_cache, options, samples)
     out = Path(output)
     with atomic_write(out) as tmp:
         np.savetxt(tmp, lines, fmt="%d")
@@ -91,14 +101,16 @@ def _match_matrices(Ds, Dt, ids_s, ids_t, matcher, seed, options):
 
 
 def _match_geometries(src: Geometry, tgt: Geometry, ids_s, ids_t, matcher, points, seed, backend,
-                      dense, cache, options):
+                      dense, cache, options, samples="fps"):
     ls, lt = src.to_internal(ids_s), tgt.to_internal(ids_t)
     m = match_shapes(src, tgt, ls, lt, matcher=matcher, n_points=points, backend=backend,
-                     seed=seed, dense=dense, cache=cache, **options)
+                     seed=seed, dense=dense, cache=cache, samples=samples, **options)
     n_file = int(src.ids.max()) + 1
     lines = np.full(n_file, -1, dtype=np.int64)
     lines[src.ids] = tgt.ids[m.vertex_map]
     summary = {"n_points": points, "n_source_vertices": int(src.n_vertices),
                "n_target_vertices": int(tgt.n_vertices), "backend": backend, "dense": dense,
-               "matcher_info": m.sample_map.info}
+               "samples": samples, "matcher_info": m.sample_map.info}
+    if samples == "same-ids":
+        summary.update(sample_error=m.info["sample_error"], exact=m.info["exact"])
     return lines, summary

@@ -9,13 +9,24 @@ each landmark method:
 2. its symmetry score after 1, 3 and ``L`` landmarks is recorded (Figure 7a);
 3. the null shape is matched to every other shape of the class with the first
    3 and with all ``L`` landmarks, target landmarks being the same vertex ids,
-   by each matcher (``pipeline.match_surfaces``), and the dense map's error is
-   measured (Figure 7b; ``metrics.py``).
+   by each matcher, and the error is measured (Figure 7b; ``metrics.py``).
 
-Errors are measured at the target's N FPS samples ``g``: the source vertex
-with the same id goes to the predicted ``p``, and ``d_t(p, g)`` is read from the
-target's distance rows (no extra geodesic solves).  The sample map's own error
-(source samples to target samples, the quantity LH05 optimises) is kept too.
+Two protocols (``PROTOCOLS``) say which samples the target has:
+
+``"corresponding"`` (default) — the κ setting of the paper (Eq. 4 compares a
+    shape with a perturbation of *the same points*): the null shape's N
+    samples (landmarks first) are carried to the target by vertex id
+    (``sampled.carry_samples``, in a shuffled order), the matcher maps source
+    samples to these target samples, and the error of sample ``x`` is the
+    target's geodesic distance between ``T(x)`` and ``x``'s own vertex.  Also
+    recorded: the fraction of samples mapped exactly, and for LH05 the recall of
+    its candidates and its objective against the true map's.
+``"independent"`` — each target gets its own farthest-point samples, so no
+    target sample is the true image of a source sample and every map errs by
+    up to a covering radius whatever its landmarks; the sample map is
+    extended to a dense map (``pipeline.match_surfaces``) and its error is
+    measured at the target's N samples ``g`` (the source vertex with the same
+    id goes to ``p``; ``d_t(p, g)`` is read from the target's distance rows).
 
 Per-target work is a joblib task (``run_tasks``): ``n_jobs`` local processes,
 or, given a Dask scheduler address, joblib's ``"dask"`` backend on that cluster
@@ -35,14 +46,20 @@ from pathlib import Path
 import numpy as np
 
 from shapecond.errors import InputError
+from shapecond.matching import refine
+from shapecond.matching.candidates import recall
 from shapecond.matching.metrics import errors_from_rows, normalise
-from shapecond.matching.pipeline import match_surfaces
-from shapecond.matching.sampled import CachedSolver, sample_surface
+from shapecond.matching.pipeline import match_samples, match_surfaces
+from shapecond.matching.sampled import (CachedSolver, carry_samples, insert_landmarks,
+                                        sample_surface, surface_at)
+from shapecond.matching.spectral import fine_kernel
 
 #: Landmark counts of the paper's Figure 7 per TOSCA class.
 PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog": 12,
                    "centaur": 7, "cat": 7, "wolf": 5}
 DEFAULT_LANDMARKS = 10
+#: Which samples a target has (module docstring).
+PROTOCOLS = ("corresponding", "independent")
 #: bump when the landmark methods change, to invalidate cached selections
 LANDMARK_CACHE_VERSION = "3"
 MESH_SUFFIXES = (".off", ".obj", ".ply")
@@ -153,9 +170,12 @@ def find_classes(dataset_dir, classes=None) -> dict[str, Path]:
 
 def check_compatible(null, other) -> None:
     """InputError unless two shapes of a class have the same vertices (count and ids)."""
-    if null.n_vertices != other.n_vertices or not np.array_equal(null.ids, other.ids):
+    if null.n_vertices != other.n_vertices:
         raise InputError(f"{other.name} has {other.n_vertices} vertices but {null.name} has "
                          f"{null.n_vertices}: shapes of a class need the same vertex count and order")
+    if not np.array_equal(null.ids, other.ids):
+        raise InputError(f"{other.name} and {null.name} do not use the same vertex ids (unreferenced "
+                         "vertices differ): shapes of a class need the same vertex count and order")
 
 
 # --- per-target task ---------------------------------------------------------------
@@ -169,36 +189,48 @@ class MatchRecord:
     method: str
     n_landmarks: int
     matcher: str
-    error: float            # mean dense error, % of half the target's geodesic diameter
-    error_area: float       # mean dense error / sqrt(area)
+    error: float            # mean error, % of half the target's geodesic diameter
+    error_area: float       # mean error / sqrt(area)
     sample_error: float     # mean sample-map error, % of half diameter
     seconds: float
-    errors: np.ndarray = field(repr=False)  # per-evaluation-point dense errors (% half diam.)
+    errors: np.ndarray = field(repr=False)  # per-evaluation-point errors (% half diam.)
+    protocol: str = "independent"
+    exact: float = math.nan          # corresponding: fraction of samples mapped exactly
+    recall: float = math.nan         # corresponding, LH05: candidates holding the true match
+    objective_ratio: float = math.nan  # corresponding, LH05: objective of the map / of the truth
+
+    FIELDS = ("cls", "target", "method", "n_landmarks", "matcher", "protocol", "error", "error_area",
+              "sample_error", "exact", "recall", "objective_ratio", "seconds")
 
     def to_dict(self) -> dict:
-        d = {k: getattr(self, k) for k in ("cls", "target", "method", "n_landmarks", "matcher",
-                                          "error", "error_area", "sample_error", "seconds")}
-        return d
+        return {k: getattr(self, k) for k in self.FIELDS}
 
 
 def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_points, seed,
-                backend, cache, load=None):
-    """Match the sampled null shape ``source`` to one target for every setting.
+                backend, cache, load=None, protocol="corresponding"):
+    """Match the sampled null shape to one target for every setting (module docstring).
 
     Parameters
     ----------
     landmark_sets : dict method -> internal vertex ids (null shape) in order.
     counts : landmark counts to use (prefixes).
     load : optional callable path -> Geometry (tests); default ``load_geometry``.
+    protocol : one of ``PROTOCOLS``.
     """
     from shapecond.shapes.io import load_geometry
 
+    if protocol not in PROTOCOLS:
+        raise InputError(f"unknown protocol {protocol!r} ({' or '.join(PROTOCOLS)})")
     load = load or load_geometry
     source = sample_surface(load(null_path), n_points, backend, seed, cache=cache)
     g = load(target_path)
     check_compatible(source.geometry, g)
-    tgt = sample_surface(g, n_points, backend, seed, cache=cache)
-    solvers = (CachedSolver(source.geometry, backend), CachedSolver(g, backend))
+    if protocol == "corresponding":
+        tgt = surface_at(g, source.samples, backend, cache)
+        solvers = (CachedSolver(source.geometry, backend, source), CachedSolver(g, backend, tgt))
+    else:
+        tgt = sample_surface(g, n_points, backend, seed, cache=cache)
+        solvers = (CachedSolver(source.geometry, backend), CachedSolver(g, backend))
     half = 0.5 * tgt.diameter
     area = tgt.unit ** 2 if g.faces is not None else None
     out = []
@@ -207,17 +239,32 @@ def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_
             c = min(c, len(lm))
             for matcher in matchers:
                 t0 = time.perf_counter()
-                m = match_surfaces(source, tgt, lm[:c], lm[:c], matcher=matcher, seed=seed,
-                                   source_solver=solvers[0], target_solver=solvers[1])
-                # evaluation points: the target's own samples (same ids on the source)
-                raw = errors_from_rows(tgt.rows, m.vertex_map[tgt.samples])
-                raw_s = errors_from_rows(m.target.rows[m.sample_map.t], m.source.samples)
+                extra = {}
+                if protocol == "corresponding":
+                    src, ls = insert_landmarks(source, lm[:c], solvers[0])
+                    carried, truth = carry_samples(src, g, solvers[1], seed)
+                    sm = match_samples(src.D, carried.D, ls, truth[ls], matcher, seed=seed)
+                    raw = errors_from_rows(carried.rows[truth], carried.samples[sm.t])
+                    raw_s = raw
+                    extra["exact"] = float(np.mean(sm.t == truth))
+                    if sm.candidates is not None:
+                        extra["recall"] = recall(sm.candidates, truth)
+                    if "h" in sm.info:
+                        kern = fine_kernel(sm.info["h"])
+                        extra["objective_ratio"] = sm.info["objective"] / refine.objective(
+                            src.D, carried.D, truth, kern)
+                else:
+                    m = match_surfaces(source, tgt, lm[:c], lm[:c], matcher=matcher, seed=seed,
+                                       source_solver=solvers[0], target_solver=solvers[1])
+                    # evaluation points: the target's own samples (same ids on the source)
+                    raw = errors_from_rows(tgt.rows, m.vertex_map[tgt.samples])
+                    raw_s = errors_from_rows(m.target.rows[m.sample_map.t], m.source.samples)
                 err = normalise(raw, 2 * half)
                 out.append(MatchRecord(
                     cls, g.name, method, c, matcher, float(err.mean()),
                     float(normalise(raw, 2 * half, area, "sqrt_area").mean()) if area else math.nan,
                     float(normalise(raw_s, 2 * half).mean()), time.perf_counter() - t0,
-                    err.astype(np.float32)))
+                    err.astype(np.float32), protocol, **extra))
     return out
 
 
@@ -275,15 +322,26 @@ def off_vertex_count(path: Path) -> int | None:
     return int(rest if rest else tokens[1])
 
 
-def prepare_task(path, n_points, seed, backend, cache, with_metric=False):
-    """Geodesics of one shape (warms the caches); the null shape also gets its metric shape."""
+def prepare_task(path, n_points, seed, backend, cache, with_metric=False, null_path=None,
+                 protocols=("independent",)):
+    """Geodesics of one shape (warms the caches).
+
+    The null shape (``with_metric``) gets its FPS rows and metric shape; a target
+    gets its own FPS rows (``"independent"``) and/or the rows at the null shape's
+    sample vertices (``"corresponding"``, needs ``null_path``).
+    """
     from shapecond.shapes.io import load_geometry
     from shapecond.shapes.metric import metric_shape
 
     g = load_geometry(path)
-    sample_surface(g, n_points, backend, seed, cache=cache)
+    if with_metric or "independent" in protocols:
+        sample_surface(g, n_points, backend, seed, cache=cache)
     if with_metric:
         metric_shape(g, n_points, backend=backend, seed=seed, cache=cache)
+    if null_path is not None and "corresponding" in protocols:
+        null = sample_surface(load_geometry(null_path), n_points, backend, seed, cache=cache)
+        check_compatible(null.geometry, g)
+        surface_at(g, null.samples, backend, cache)
     return str(path)
 
 
@@ -353,12 +411,20 @@ class Evaluation:
 def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "cnbs"),
                      matchers=("lh05", "faq"), n_jobs=1, scheduler=None, quick=False,
                      n_points=None, seed=0, backend="heat", cache=True, progress=False,
-                     max_targets=None) -> Evaluation:
+                     max_targets=None, protocol="corresponding") -> Evaluation:
     """Run the Figure 7 evaluation on every class folder of ``dataset_dir``.
 
-    ``quick``: classes default to wolf and centaur (or the first two), at most 2
-    targets per class, N = 200 and the quick score search.
+    ``protocol``: ``"corresponding"``, ``"independent"`` (module docstring) or
+    ``"both"``.  ``quick``: classes default to wolf and centaur (or the first
+    two), at most 2 targets per class, N = 200 and the quick score search.
+
+    Phases: the null shapes' geodesics; then the targets' geodesics together
+    with the landmark selections (they depend only on the null shapes); then
+    the matchings.
     """
+    if protocol not in PROTOCOLS + ("both",):
+        raise InputError(f"unknown protocol {protocol!r} (corresponding, independent or both)")
+    protocols = PROTOCOLS if protocol == "both" else (protocol,)
     if quick and not classes:
         names = list(find_classes(dataset_dir))
         classes = [c for c in ("wolf", "centaur") if c in names] or names[:2]
@@ -380,15 +446,16 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
     common = (n_points, seed, backend, cache)
     timing = {}
     t0 = time.perf_counter()
-    prep = [(prepare_task, (p, *common), dict(with_metric=(p == null)))
-            for null, targets, _ in plan.values() for p in [null, *targets]]
-    run_tasks(prep, n_jobs, scheduler, progress)
-    timing["geodesics"] = time.perf_counter() - t0
+    run_tasks([(prepare_task, (null, *common), dict(with_metric=True)) for null, _, _ in plan.values()],
+              n_jobs, scheduler, progress)
+    timing["null shapes"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    lm_tasks = [(landmark_task, (cls, null, m, k, *common, quick), {})
-                for cls, (null, _, k) in plan.items() for m in methods]
-    landmarks = run_tasks(lm_tasks, n_jobs, scheduler, progress)
-    timing["landmarks"] = time.perf_counter() - t0
+    tasks = [(landmark_task, (cls, null, m, k, *common, quick), {})
+             for cls, (null, _, k) in plan.items() for m in methods]
+    tasks += [(prepare_task, (p, *common), dict(null_path=null, protocols=protocols))
+              for null, targets, _ in plan.values() for p in targets]
+    landmarks = [d for d in run_tasks(tasks, n_jobs, scheduler, progress) if isinstance(d, dict)]
+    timing["landmarks and targets"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     match_tasks = []
     for cls, (null, targets, k) in plan.items():
@@ -396,10 +463,13 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
         sets = {m: sets[m] for m in methods}
         counts = sorted({min(3, k), k})
         for tp in targets:
-            match_tasks.append((target_task, (cls, null, tp, sets, counts, tuple(matchers), *common), {}))
+            for prot in protocols:
+                match_tasks.append((target_task, (cls, null, tp, sets, counts, tuple(matchers), *common),
+                                    dict(protocol=prot)))
     records = [r for batch in run_tasks(match_tasks, n_jobs, scheduler, progress) for r in batch]
     timing["matching"] = time.perf_counter() - t0
     settings = dict(dataset=str(dataset_dir), classes=list(plan), methods=list(methods),
+                    protocols=list(protocols),
                     matchers=list(matchers), n_points=n_points, seed=seed, backend=backend,
                     quick=quick, n_jobs=n_jobs, scheduler=None if scheduler is None else str(scheduler),
                     landmark_counts={c: v[2] for c, v in plan.items()},

@@ -17,11 +17,14 @@ import numpy as np
 
 from shapecond.errors import InputError
 from shapecond.matching.dense import dense_map
-from shapecond.matching.sampled import SampledSurface, insert_landmarks, sample_surface
+from shapecond.matching.metrics import errors_from_rows, normalise
+from shapecond.matching.sampled import SampledSurface, carry_samples, insert_landmarks, sample_surface
 from shapecond.matching.seeded import faq_match
 from shapecond.matching.spectral import SampleMatch, lh05_match
 
 MATCHERS = ("lh05", "faq")
+#: Which samples the target gets (``match_shapes``): its own FPS samples, or the source's vertex ids.
+SAMPLINGS = ("fps", "same-ids")
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,8 +85,16 @@ def match_surfaces(source: SampledSurface, target: SampledSurface, landmarks_sou
 
 def match_shapes(source_geometry, target_geometry, landmarks_source, landmarks_target,
                  matcher: str = "lh05", n_points: int = 400, backend: str = "heat", seed: int = 0,
-                 dense: str = "distances", cache: bool = True, **options) -> DenseMatch:
+                 dense: str = "distances", cache: bool = True, samples: str = "fps",
+                 **options) -> DenseMatch:
     """Sample both shapes (landmarks first) and match them, source to target.
+
+    With ``samples="same-ids"`` the two shapes share their vertex order (a class
+    of TOSCA, say) and the target is sampled at the source's sample vertices
+    (``sampled.carry_samples``, the evaluation's *corresponding* protocol): the
+    true sample map is known, and ``info`` reports its error (``sample_error``,
+    % of half the target's geodesic diameter) and the fraction of samples
+    matched exactly (``exact``).  The target landmarks must then be the source's.
 
     Parameters
     ----------
@@ -106,9 +117,29 @@ def match_shapes(source_geometry, target_geometry, landmarks_source, landmarks_t
         raise InputError(f"landmark counts differ: {ls.size} on the source, {lt.size} on the target")
     if matcher not in MATCHERS:
         raise InputError(f"unknown matcher {matcher!r} ({' or '.join(MATCHERS)})")
+    if samples not in SAMPLINGS:
+        raise InputError(f"unknown sampling {samples!r} ({' or '.join(SAMPLINGS)})")
     n = min(source_geometry.n_vertices, target_geometry.n_vertices)
     if n_points > n:
         raise InputError(f"{n_points} samples requested but a shape has only {n} vertices")
     src = sample_surface(source_geometry, n_points, backend, seed, ls, cache)
+    if samples == "same-ids":
+        return _match_same_ids(src, target_geometry, ls, lt, matcher, dense, seed, **options)
     tgt = sample_surface(target_geometry, n_points, backend, seed, lt, cache)
     return match_surfaces(src, tgt, ls, lt, matcher, dense, seed, **options)
+
+
+def _match_same_ids(src: SampledSurface, target_geometry, ls, lt, matcher, dense, seed, **options):
+    """``match_shapes`` with the target sampled at the source's sample vertices."""
+    src, ils = insert_landmarks(src, ls)
+    tgt, truth = carry_samples(src, target_geometry, seed=seed)  # refuses different vertex ids
+    if not np.array_equal(ls, lt):
+        raise InputError("with same-ids samples the target landmarks must be the source's vertex ids")
+    sm = match_samples(src.D, tgt.D, ils, truth[ils], matcher, seed=seed, **options)
+    vmap = dense_map(src, tgt, sm.t, method=dense)
+    vmap[ls] = lt
+    raw = errors_from_rows(tgt.rows[truth], tgt.samples[sm.t])
+    info = dict(matcher=matcher, dense=dense, n_landmarks=int(ls.size), samples="same-ids",
+                sample_error=float(normalise(raw, tgt.diameter).mean()),
+                exact=float(np.mean(sm.t == truth)))
+    return DenseMatch(vmap, sm, src, tgt, info)

@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 from collections import defaultdict
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +25,16 @@ from scipy.stats import spearmanr
 from shapecond.matching.metrics import cumulative_curve
 
 THRESHOLDS = np.linspace(0.0, 50.0, 101)  # % of half the geodesic diameter
+
+
+def protocols(ev) -> list:
+    """The protocols of an evaluation's records, in the settings' order."""
+    return list(ev.settings.get("protocols") or ["independent"])
+
+
+def by_protocol(ev, protocol):
+    """The same evaluation restricted to the records of one protocol."""
+    return replace(ev, records=[r for r in ev.records if getattr(r, "protocol", "independent") == protocol])
 
 
 def mean_errors(records, key="error"):
@@ -92,15 +103,15 @@ def markdown(ev, plots=()) -> str:
     st = ev.settings
     methods, matchers, classes = st["methods"], st["matchers"], st["classes"]
     scores = score_table(ev.landmarks)
-    errs = mean_errors(ev.records)
-    errs_area = mean_errors(ev.records, "error_area")
-    serr = mean_errors(ev.records, "sample_error")
     out = ["# Landmark evaluation (paper Section 7, Figure 7)", "",
            f"Dataset `{st['dataset']}`; N = {st['n_points']} samples, {st['backend']} geodesics, "
            f"seed {st['seed']}{', quick mode' if st['quick'] else ''}. Null shape matched to "
-           "every other shape of its class (ground truth: identity on vertex ids). Errors: mean "
-           "geodesic error of the dense map at the target's N samples, in % of half the "
-           "target's geodesic diameter (paper) unless stated.", "",
+           "every other shape of its class (ground truth: identity on vertex ids). Errors in % "
+           "of half the target's geodesic diameter (paper) unless stated. Protocols: "
+           "*corresponding* — the target's samples are the null shape's sample vertices (the κ "
+           "setting; error of sample x = geodesic distance from T(x) to x's own vertex); "
+           "*independent* — each target has its own FPS samples and the dense map is measured "
+           "at them.", "",
            "Timings (s): " + ", ".join(f"{k} {v:.0f}" for k, v in ev.seconds.items()), ""]
     floors = score_table(ev.landmarks, "floor")
     out += ["## Symmetry score after 1, 3 and all landmarks (Figure 7a)", "",
@@ -117,8 +128,24 @@ def markdown(ev, plots=()) -> str:
             cells.append(" / ".join(_fmt(sc.get(c)) + ("*" if _at_floor(sc.get(c), fl.get(c)) else "")
                                     for c in sorted(sc)))
         out.append(f"| {cls} | {L} | " + " | ".join(cells) + " |")
-    for matcher in matchers:
-        out += ["", f"## Mean error, matcher {matcher} (Figure 7b)", "",
+    for prot in protocols(ev):
+        out += _error_sections(by_protocol(ev, prot), prot, scores)
+    out += ["", "## Landmarks (null shape, file vertex ids)", ""]
+    for d in sorted(ev.landmarks, key=lambda d: (d["cls"], d["method"])):
+        out.append(f"- {d['cls']} {d['method']} ({d['seconds']:.1f} s): {d['ids']}")
+    if plots:
+        out += ["", "## Plots", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
+    return "\n".join(out) + "\n"
+
+
+def _error_sections(ev, protocol, scores) -> list[str]:
+    """Figure 7b tables, correlations and the other error measures of one protocol."""
+    st = ev.settings
+    methods, classes = st["methods"], st["classes"]
+    errs = mean_errors(ev.records)
+    out = []
+    for matcher in st["matchers"]:
+        out += ["", f"## Mean error, {protocol} samples, matcher {matcher} (Figure 7b)", "",
                 "| class | " + " | ".join(f"{m} 3 / L" for m in methods) + " | best at 3 | lowest score at 3 |",
                 "|---|" + "---|" * (len(methods) + 2)]
         for cls in classes:
@@ -140,23 +167,28 @@ def markdown(ev, plots=()) -> str:
         out += ["", f"Spearman rank correlation between score and error ({matcher}, {n} "
                 f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}; within classes "
                 f"(mean of per-class ρ over {nw} classes): {_fmt(rw)}."]
-    out += ["", "## Other error measures", "",
-            "| class | method | matcher | L | dense % half diam. | dense / sqrt(area) | sample map % |",
-            "|---|---|---|---|---|---|---|"]
+    cols = ("error_area", "sample_error", "exact", "recall", "objective_ratio")
+    tables = {c: mean_errors(ev.records, c) for c in cols}
+    out += ["", f"## Other measures, {protocol} samples", "",
+            "Means over the targets: error / sqrt(area); the sample map's own error; the fraction "
+            "of samples mapped exactly, the recall of LH05's candidates and LH05's objective over "
+            "the true map's (corresponding samples only).", "",
+            "| class | method | matcher | L | % half diam. | / sqrt(area) | sample map % | exact | "
+            "recall | objective / truth |", "|---|---|---|---|---|---|---|---|---|---|"]
     for key in sorted(errs):
         cls, m, c, matcher = key
         out.append(f"| {cls} | {m} | {matcher} | {c} | {_fmt(errs[key])} | "
-                   f"{_fmt(errs_area.get(key), 3)} | {_fmt(serr.get(key))} |")
-    out += ["", "## Landmarks (null shape, file vertex ids)", ""]
-    for d in sorted(ev.landmarks, key=lambda d: (d["cls"], d["method"])):
-        out.append(f"- {d['cls']} {d['method']} ({d['seconds']:.1f} s): {d['ids']}")
-    if plots:
-        out += ["", "## Plots", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
-    return "\n".join(out) + "\n"
+                   + " | ".join(_fmt(tables[col].get(key), 4 if col == "objective_ratio" else 3)
+                                for col in cols) + " |")
+    return out
 
 
 def plot(ev, out_dir) -> list[Path]:
-    """Cumulative error curves (one panel per class) and score-vs-error scatter, as PNGs."""
+    """Per protocol: cumulative error curves (one panel per class) and score-vs-error scatter, as PNGs."""
+    return [p for prot in protocols(ev) for p in _plot(by_protocol(ev, prot), prot, out_dir)]
+
+
+def _plot(ev, protocol, out_dir) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -185,7 +217,8 @@ def plot(ev, out_dir) -> list[Path]:
         for ax in axes.ravel()[len(classes):]:
             ax.axis("off")
         fig.tight_layout()
-        p = out_dir / f"error_curves_{matcher}.png"
+        fig.suptitle(f"{protocol} samples, {matcher}")
+        p = out_dir / f"error_curves_{protocol}_{matcher}.png"
         fig.savefig(p, dpi=90)
         plt.close(fig)
         paths.append(p)
@@ -206,10 +239,17 @@ def plot(ev, out_dir) -> list[Path]:
     ax.set_ylabel("mean error, % of half diameter")
     ax.legend(fontsize=6)
     fig.tight_layout()
-    p = out_dir / "score_vs_error.png"
+    ax.set_title(f"{protocol} samples")
+    p = out_dir / f"score_vs_error_{protocol}.png"
     fig.savefig(p, dpi=90)
     plt.close(fig)
     return paths + [p]
+
+
+def correlations(ev) -> dict:
+    """{matcher: {rho, p, n, within_class}} of ``correlation`` and ``within_class``."""
+    return {m: dict(zip(("rho", "p", "n"), correlation(ev, m)), within_class=within_class(ev, m)[0])
+            for m in ev.settings["matchers"]}
 
 
 def write_report(ev, out_dir) -> Path:
@@ -224,9 +264,8 @@ def write_report(ev, out_dir) -> Path:
         Path(tmp).write_text(markdown(ev, plots))
     data = dict(settings=ev.settings, seconds=ev.seconds, landmarks=ev.landmarks,
                 records=[r.to_dict() for r in ev.records],
-                correlation={m: dict(zip(("rho", "p", "n"), correlation(ev, m)),
-                                     within_class=within_class(ev, m)[0])
-                             for m in ev.settings["matchers"]})
+                correlation=correlations(by_protocol(ev, protocols(ev)[0])),
+                correlation_by_protocol={p: correlations(by_protocol(ev, p)) for p in protocols(ev)})
     with atomic_write(out_dir / "results.json") as tmp:
         Path(tmp).write_text(json.dumps(_plain(data), indent=1, allow_nan=False))
     return path

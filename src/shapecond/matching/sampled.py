@@ -226,8 +226,9 @@ def carry_samples(source: SampledSurface, target: Geometry, solver=None, seed: i
     """
     g = source.geometry
     if g.n_vertices != target.n_vertices or not np.array_equal(g.ids, target.ids):
-        raise InputError(f"{target.name} has {target.n_vertices} vertices but {g.name} has "
-                         f"{g.n_vertices}: corresponding samples need the same vertex count and order")
+        raise InputError(f"{target.name} ({target.n_vertices} vertices) and {g.name} ({g.n_vertices}) "
+                         "do not share their vertex ids: corresponding samples need the same vertex "
+                         "count and order")
     n = source.n_samples
     perm = np.random.default_rng(seed).permutation(n) if shuffle else np.arange(n)
     vertices = source.samples[perm]

@@ -301,6 +301,12 @@ def complete_map(D_source, D_target, t: np.ndarray) -> np.ndarray:
     return t
 
 
+def fine_kernel(h: float) -> R.Kernel:
+    """The local kernel of the refinement (module docstring, step 5) for sample spacing ``h``;
+    ``info["objective"]`` of a refined ``lh05_match`` is ``refine.objective`` under it."""
+    return R.Kernel(0.5 * h, 0.0, 3.0 * h)
+
+
 def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: int = 20,
                sigma: float | None = None, sigma_factor: float = 2.0,
                rounding: str = "assignment", refine: bool = True, rounds: int = 2,
@@ -368,7 +374,7 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
         ds = D_source[iu]
         rel = np.abs(ds - D_target[t][:, t][iu]) / np.maximum(ds, h)
         coarse = R.Kernel(h, 2.0 * float(np.median(rel)))
-        fine = R.Kernel(0.5 * h, 0.0, 3.0 * h)
+        fine = fine_kernel(h)
         t, _ = R.polish(D_source, D_target, t, free, coarse, knn)
         best = None
         for _ in range(max(rounds, 1)):

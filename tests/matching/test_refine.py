@@ -1,0 +1,119 @@
+"""The discrete refinement of LH05 (``matching.refine``) against brute force on small instances."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from scipy.spatial.distance import cdist
+
+from shapecond.matching import refine as R
+from shapecond.matching.seeded import faq_match
+from shapecond.matching.spectral import default_sigma, fine_kernel, lh05_match
+
+
+def _instance(n, seed, noise=0.0):
+    """Source distances of random planar points; target = a noisy copy, permuted."""
+    rng = np.random.default_rng(seed)
+    p = rng.uniform(size=(n, 2)) * [2.0, 1.0]
+    p[:, 1] *= 1.0 - 0.35 * p[:, 0]
+    Ds = cdist(p, p)
+    q = p + noise * rng.normal(size=p.shape)
+    perm = rng.permutation(n)  # target j holds source perm[j]
+    Dt = cdist(q, q)[np.ix_(perm, perm)]
+    return Ds, Dt, np.argsort(perm)
+
+
+def _K(kernel, d, e):
+    """The kernel of the module docstring, written out."""
+    tau2 = kernel.tol ** 2 + (kernel.rel * d) ** 2
+    u = (d - e) / math.sqrt(tau2)
+    phi = max(0.0, 1.0 - u * u / 4.0) ** 2
+    w = 1.0 if math.isinf(kernel.radius) else max(0.0, 1.0 - d * d / (4 * kernel.radius ** 2)) ** 2
+    return phi * w
+
+
+def _F(Ds, Dt, t, kernel):
+    n = len(t)
+    return sum(_K(kernel, Ds[x, y], Dt[t[x], t[y]]) for x in range(n) for y in range(n) if x != y)
+
+
+KERNELS = [R.Kernel(0.3), R.Kernel(0.2, 0.1), R.Kernel(0.15, 0.0, 0.4)]
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(KERNELS))
+def test_objective_and_gain_equal_their_definitions(seed, kernel):
+    Ds, Dt, _ = _instance(9, seed, noise=0.05)
+    t = np.random.default_rng(seed).permutation(9)
+    assert R.objective(Ds, Dt, t, kernel) == pytest.approx(_F(Ds, Dt, t, kernel), rel=1e-9, abs=1e-12)
+    for x, y in ((0, 3), (4, 4), (8, 1)):
+        want = sum(_K(kernel, Ds[x, xp], Dt[y, t[xp]]) for xp in range(9) if xp != x)
+        assert R.gain(Ds, Dt, t, x, y, kernel) == pytest.approx(want, rel=1e-9, abs=1e-12)
+
+
+def test_biweights_agree_with_gaussians_to_second_order():
+    k = R.Kernel(1.0, 0.0, 1.0)
+    for small in (1e-3, 1e-2):
+        # φ(u) w(d) ≈ exp(-u²/2) exp(-d²/(2R²)) up to fourth-order terms
+        assert _K(k, small, 0.0) == pytest.approx(math.exp(-small ** 2), abs=10 * small ** 4)
+    assert _K(k, 2.0, 2.0) == 0.0 and _K(R.Kernel(1.0), 3.0, 0.5) == 0.0
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(KERNELS))
+def test_polish_never_lowers_the_objective_and_ends_at_a_swap_optimum(seed, kernel):
+    n = 9
+    Ds, Dt, _ = _instance(n, seed, noise=0.05)
+    rng = np.random.default_rng(seed)
+    t0 = rng.permutation(n)
+    free = np.setdiff1d(np.arange(n), [2])
+    knn = R.neighbours(Dt, n - 1)  # every swap is a neighbour swap
+    t, f = R.polish(Ds, Dt, t0, free, kernel, knn, k=n - 1)
+    assert sorted(t) == list(range(n)) and t[2] == t0[2]
+    assert f == pytest.approx(_F(Ds, Dt, t, kernel), rel=1e-9, abs=1e-12)
+    assert f >= _F(Ds, Dt, t0, kernel) - 1e-12
+    for a in free:
+        for b in free:
+            if a < b:
+                s = t.copy()
+                s[a], s[b] = s[b], s[a]
+                assert _F(Ds, Dt, s, kernel) <= f + 1e-9
+
+
+def test_robust_reassignment_keeps_a_permutation_and_recovers_a_shifted_region():
+    Ds, Dt, truth = _instance(60, 3)
+    t = truth.copy()
+    region = np.argsort(Ds[0])[:12]  # a patch around sample 0, rotated by one position
+    t[region] = truth[np.roll(region, 1)]
+    free = np.setdiff1d(np.arange(60), [59])
+    out = R.robust_reassignment(Ds, Dt, t, free)
+    assert sorted(out) == list(range(60)) and out[59] == t[59]
+    assert np.array_equal(out, truth)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_lh05_reports_its_objective_and_beats_the_truth_on_an_isometry(seed):
+    Ds, Dt, truth = _instance(80, seed)
+    ls = [0, 1, 2]
+    m = lh05_match(Ds, Dt, ls, truth[ls], k=10)
+    kern = fine_kernel(default_sigma(Ds))
+    assert m.info["objective"] == pytest.approx(R.objective(Ds, Dt, m.t, kern), rel=1e-9)
+    assert m.info["objective"] >= R.objective(Ds, Dt, truth, kern) - 1e-9
+    assert np.array_equal(m.t, truth)
+
+
+@pytest.mark.parametrize("matcher", ["lh05", "faq"])
+@pytest.mark.parametrize("seed", [4, 5, 6])
+def test_correct_landmarks_do_not_cost_accuracy(matcher, seed):
+    """A near-isometric pair: matching with 10 correct landmarks errs no more than with 3."""
+    Ds, Dt, truth = _instance(100, seed, noise=0.004)
+    order = [0]
+    for _ in range(9):  # farthest-point landmarks, spread over the domain
+        order.append(int(np.argmax(Ds[order].min(axis=0))))
+    match = lh05_match if matcher == "lh05" else faq_match
+    err = {}
+    for c in (3, 10):
+        t = match(Ds, Dt, order[:c], truth[order[:c]]).t
+        err[c] = float(np.mean(Ds[np.arange(100), np.argsort(truth)[t]]))
+    assert err[10] <= err[3] * 1.05 + 1e-12, err
