@@ -303,13 +303,14 @@ def polish(D_source, D_target, t, free, kernel: Kernel, knn=None, k: int = 16,
 
 
 @numba.njit(cache=True, parallel=True)
-def _quantile_cost(Ds, Dt, t, rows, cols, anchors, rank):
-    C = np.empty((rows.size, cols.size))
+def _quantile_cost(Ds, Dt, t, rows, band, anchors, rank):
+    """C[i, j] = the rank-th smallest |D_s[x, a] − D_t[y, T a]| over the anchors, x = rows[i], y = band[i, j]."""
+    C = np.empty(band.shape)
     for i in numba.prange(rows.size):
         x = rows[i]
         buf = np.empty(anchors.size)
-        for j in range(cols.size):
-            y = cols[j]
+        for j in range(band.shape[1]):
+            y = band[i, j]
             for q in range(anchors.size):
                 a = anchors[q]
                 buf[q] = abs(Ds[x, a] - Dt[y, t[a]])
@@ -318,21 +319,30 @@ def _quantile_cost(Ds, Dt, t, rows, cols, anchors, rank):
 
 
 def robust_reassignment(D_source, D_target, t, free, quantile: float = 0.25,
-                        n_anchors: int = 64) -> np.ndarray:
+                        n_anchors: int = 64, knn=None, k: int = 64) -> np.ndarray:
     """Re-place every free sample by the anchors ``T a`` (module docstring).
 
     The anchors are the first ``n_anchors`` source samples (farthest-point
-    order spreads them over the shape); the free samples share their current
-    images, assigned to minimise the sum of the ``quantile``-quantiles of the
-    distance disagreements.
+    order spreads them over the shape).  Each free sample may move to its
+    image's ``k`` nearest target samples (``knn``; a region shifted by a sample
+    or two comes back), the images shared by the free samples, assigned to
+    minimise the sum of the ``quantile``-quantiles of the distance disagreements.
     """
     Ds, Dt = _f64(D_source), _f64(D_target)
     t = np.asarray(t, dtype=np.int64)
     free = np.asarray(free, dtype=np.int64)
+    knn = neighbours(Dt, k) if knn is None or knn.shape[1] < k else knn
     anchors = np.arange(min(n_anchors, Ds.shape[0]), dtype=np.int64)
     rank = min(anchors.size - 1, max(0, int(round(quantile * (anchors.size - 1)))))
     img = t[free]
-    r, c = linear_sum_assignment(_quantile_cost(Ds, Dt, t, free, img, anchors, rank))
+    band = np.ascontiguousarray(np.concatenate([img[:, None], knn[img, :k]], axis=1))
+    pos = np.full(Dt.shape[0], -1, dtype=np.int64)
+    pos[img] = np.arange(img.size)
+    cols = pos[band]
+    ok = cols >= 0
+    C = np.full((free.size, free.size), 1e30)
+    C[np.nonzero(ok)[0], cols[ok]] = _quantile_cost(Ds, Dt, t, free, band, anchors, rank)[ok]
+    r, c = linear_sum_assignment(C)
     out = t.copy()
     out[free[r]] = img[c]
     return out
@@ -344,10 +354,10 @@ def refine(D_source, D_target, t, free, kernel: Kernel, knn=None, robust_rounds:
 
     Returns (map, F(map)); ``F`` never decreases from the start's.
     """
-    knn = neighbours(D_target, 16) if knn is None else knn
+    knn = neighbours(D_target, 64) if knn is None else knn
     t, f = polish(D_source, D_target, t, free, kernel, knn)
     for _ in range(robust_rounds):
-        t2, f2 = polish(D_source, D_target, robust_reassignment(D_source, D_target, t, free),
+        t2, f2 = polish(D_source, D_target, robust_reassignment(D_source, D_target, t, free, knn=knn),
                         free, kernel, knn)
         if not f2 > f:
             break

@@ -120,38 +120,48 @@ def _affinity_kernel(Ds, Dt, src, tgt, t0, r2, iw2, cut2):
 
 
 @numba.njit(cache=True)
-def _sparse_affinity_kernel(Ds, Dt, src, tgt, order, starts, t0, r2, iw2, cut2):
-    """CSR pattern and values of M for a kernel of finite support.
-
-    ``order[starts[x]:starts[x + 1]]`` lists the candidates of source sample ``x``.
-    """
-    n = Ds.shape[0]
-    C = src.size
-    indptr = np.zeros(C + 1, dtype=np.int64)
-    indices = np.empty(1 << 20, dtype=np.int32)
-    data = np.empty(1 << 20, dtype=np.float32)
-    nnz = 0
-    for i in range(C):
-        x, y = src[i], tgt[i]
-        for x2 in range(n):
-            d = Ds[x, x2]
-            if x2 == x or d * d >= cut2:
-                continue
-            for q in range(starts[x2], starts[x2 + 1]):
-                j = order[q]
-                y2 = tgt[j]
-                if y2 == y:
-                    continue
+def _sparse_affinity_row(Ds, Dt, src, tgt, order, starts, near, i, t0, r2, iw2, cut2, cols, vals):
+    """Nonzeros of row ``i`` of M into ``cols``/``vals``; returns their count."""
+    x, y = src[i], tgt[i]
+    k = 0
+    for x2 in near[x]:
+        if x2 < 0:
+            break
+        d = Ds[x, x2]
+        for q in range(starts[x2], starts[x2 + 1]):
+            j = order[q]
+            y2 = tgt[j]
+            if y2 != y:
                 v = R._k(d, Dt[y, y2], t0, r2, iw2, cut2)
                 if v > 0.0:
-                    if nnz == indices.size:
-                        indices = np.concatenate((indices, np.empty(indices.size, dtype=np.int32)))
-                        data = np.concatenate((data, np.empty(data.size, dtype=np.float32)))
-                    indices[nnz] = j
-                    data[nnz] = v
-                    nnz += 1
-        indptr[i + 1] = nnz
-    return indptr, indices[:nnz], data[:nnz]
+                    cols[k] = j
+                    vals[k] = v
+                    k += 1
+    return k
+
+
+@numba.njit(cache=True, parallel=True)
+def _sparse_affinity_kernel(Ds, Dt, src, tgt, order, starts, near, t0, r2, iw2, cut2):
+    """CSR pattern and values of M for a kernel of finite support (two passes, rows in parallel).
+
+    ``order[starts[x]:starts[x + 1]]`` lists the candidates of source sample ``x``;
+    ``near[x]`` the other source samples within the kernel's support (-1 padded).
+    """
+    C = src.size
+    width = near.shape[1] * (np.max(starts[1:] - starts[:-1]) if starts.size > 1 else 0)
+    counts = np.zeros(C + 1, dtype=np.int64)
+    for i in numba.prange(C):
+        cols = np.empty(width, dtype=np.int32)
+        vals = np.empty(width, dtype=np.float32)
+        counts[i + 1] = _sparse_affinity_row(Ds, Dt, src, tgt, order, starts, near, i, t0, r2, iw2,
+                                             cut2, cols, vals)
+    indptr = np.cumsum(counts)
+    indices = np.empty(indptr[-1], dtype=np.int32)
+    data = np.empty(indptr[-1], dtype=np.float32)
+    for i in numba.prange(C):
+        _sparse_affinity_row(Ds, Dt, src, tgt, order, starts, near, i, t0, r2, iw2, cut2,
+                             indices[indptr[i]:indptr[i + 1]], data[indptr[i]:indptr[i + 1]])
+    return indptr, indices, data
 
 
 def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 512,
@@ -173,9 +183,15 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
         src, tgt = np.ascontiguousarray(cand.source), np.ascontiguousarray(cand.target)
         order = np.argsort(src, kind="stable")
         starts = np.searchsorted(src[order], np.arange(Ds.shape[0] + 1))
+        t0, r2, iw2, cut2 = kernel.params()
+        within = (Ds * Ds < cut2) & ~np.eye(Ds.shape[0], dtype=bool)
+        near = np.full((Ds.shape[0], max(int(within.sum(axis=1).max()), 1)), -1, dtype=np.int64)
+        for x, row in enumerate(within):
+            idx = np.flatnonzero(row)
+            near[x, :idx.size] = idx
         indptr, indices, data = _sparse_affinity_kernel(
-            Ds, np.ascontiguousarray(D_target, dtype=np.float64), src, tgt, order, starts,
-            *kernel.params())
+            Ds, np.ascontiguousarray(D_target, dtype=np.float64), src, tgt, order, starts, near,
+            t0, r2, iw2, cut2)
         return sp.csr_matrix((data, indices, indptr), shape=(C, C))
     if 4 * C * C > MAX_AFFINITY_BYTES:
         raise TooLargeError(
@@ -309,7 +325,7 @@ def fine_kernel(h: float) -> R.Kernel:
 
 def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: int = 20,
                sigma: float | None = None, sigma_factor: float = 2.0,
-               rounding: str = "assignment", refine: bool = True, rounds: int = 2,
+               rounding: str = "assignment", refine: bool = True, rounds: int = 3,
                quantile_weight: float = 0.5, tol: float = 1e-7, max_iter: int = 500) -> SampleMatch:
     """Leordeanu–Hebert spectral matching with landmarks, source to target.
 
@@ -369,7 +385,7 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
                 rounding=rounding, refine=refine)
     if refine and h > 0:
         free = np.setdiff1d(np.arange(n_s), cand.landmarks_source)
-        knn = R.neighbours(D_target, max(k, 16))
+        knn = R.neighbours(D_target, max(k, 64))
         iu = np.triu_indices(n_s, 1)
         ds = D_source[iu]
         rel = np.abs(ds - D_target[t][:, t][iu]) / np.maximum(ds, h)
