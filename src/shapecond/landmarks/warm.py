@@ -14,6 +14,13 @@ import math
 import numpy as np
 
 
+#: With a budget (the scale-aware score), a base map whose distances from the candidate p
+#: are off by more than sqrt(HOPELESS) = 2 times the RMS budget once p is fixed is not
+#: searched from: no nearby map is feasible with p fixed, and unwinding it costs O(N)
+#: moves of O(N·M) each.  Values stay lower bounds (they come from the other maps).
+HOPELESS = 4.0
+
+
 def _used(t, m):
     used = np.zeros(m, dtype=bool)
     used[t] = True
@@ -157,6 +164,8 @@ class WarmPolisher:
                 t, G, H, used, d2v, dist2v = self._repaired(b, p)
                 if np.any(t[lm] != lm):
                     continue  # a base map that moves a landmark (cannot happen for true warm maps)
+                if self.budget is not None and obj.anchor_rows(D, t, [p])[0] > HOPELESS * lb:
+                    continue  # p kills this map (see HOPELESS)
                 for _ in range(size - 1):
                     a, c = rng.choice(free, size=2, replace=False)
                     dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
