@@ -23,7 +23,7 @@ def test_landmarks_json_keys_and_pictures(tmp_path, capsys):
                          "--no-cache")
     assert code == 0, err
     d = json.loads(out)
-    assert set(d) == {"landmarks", "scores", "method", "seconds"}
+    assert set(d) == {"landmarks", "scores", "method", "seconds", "score"}
     assert d["method"] == "cnbs" and len(d["landmarks"]) == 2 and len(d["scores"]) == 2
     assert d["scores"][1] <= d["scores"][0] + 1e-12 or d["scores"][1] == "inf"
     assert mpimg.imread(png).shape[1] > 400 and ply.stat().st_size > 1000

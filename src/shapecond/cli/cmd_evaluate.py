@@ -23,7 +23,7 @@ from ..matching.pipeline import MATCHERS
 from ..matching.report import by_protocol, correlations, protocols, write_report
 from .common import emit_json, info, json_option, progress_enabled
 
-DEFAULT_METHODS = "fps,pls,hks,cnbs"
+DEFAULT_METHODS = "fps,pls,hks,cnbs,cnbs-scale"
 
 
 def _names(text, allowed=None, what="name"):

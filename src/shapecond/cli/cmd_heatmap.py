@@ -24,9 +24,14 @@ from .common import (build_shape, emit_json, fmt, info, json_option, load_geomet
               show_default=True, help="Effort of the witness searches.")
 @click.option("--resolve-fraction", type=float, default=RESOLVE_FRACTION, show_default=True,
               help="Share of candidates (those the witness maps move farthest) searched again.")
+@click.option("--score", "score", type=click.Choice(["sigma", "scale"]), default="sigma", show_default=True,
+              help="sigma: the paper's σ with each point fixed; scale: the scale-aware δ(ε) "
+                   "(the CNBS heat map of --method cnbs-scale).")
+@click.option("--epsilon", type=float, default=None,
+              help="--score scale: distortion level ε [default: the median sample spacing].")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
-def command(input_spec, landmarks, png, ply, effort, resolve_fraction, up, as_json, **kwargs):
+def command(input_spec, landmarks, png, ply, effort, resolve_fraction, score, epsilon, up, as_json, **kwargs):
     """The symmetry score with each sample fixed as a landmark, drawn on the shape.
 
     Low values (blue) are good landmarks: fixing them breaks the near-symmetries.
@@ -41,28 +46,38 @@ def command(input_spec, landmarks, png, ply, effort, resolve_fraction, up, as_js
                                      shape_kw.get("symmetry_map"))
     shape = build_shape(input_spec, landmarks=ids, loaded=loaded, **shape_kw)
     L = list(range(len(ids)))  # build_shape puts the landmarks first
-    hm = heat_map(shape.D, shape.n_samples, landmarks=L, seed=shape_kw.get("seed", 0), effort=effort,
-                  resolve_fraction=resolve_fraction)
+    n = shape.n_samples
+    budget, unit, name = None, 1.0, "sigma"
+    if score == "scale":
+        from ..symmetry.scale import budget_of, default_epsilon
+
+        epsilon = default_epsilon(shape.D, n) if epsilon is None else epsilon
+        budget, unit, name = budget_of(epsilon, n, shape.D), 1.0 / math.sqrt(n), "delta"
+    hm = heat_map(shape.D, n, landmarks=L, seed=shape_kw.get("seed", 0), effort=effort,
+                  resolve_fraction=resolve_fraction, budget=budget)
     best = hm.argmin()
-    vals = hm.values.copy()
-    vals[L] = hm.sigma_before if math.isfinite(hm.sigma_before) else np.nan
+    values, before = hm.values * unit, hm.sigma_before * unit  # δ = sqrt(d²) / sqrt(N)
+    vals = values.copy()
+    vals[L] = before if math.isfinite(before) else np.nan
     plot_vals = np.where(np.isnan(vals), np.nanmax(np.where(np.isfinite(vals), vals, np.nan)), vals)
-    title = (f"sigma with each point fixed (before: {fmt(hm.sigma_before)}; "
-             f"best: {fmt(float(hm.values[best]))} at vertex {int(shape.sample_ids[best])})")
+    title = (f"{name} with each point fixed (before: {fmt(before)}; "
+             f"best: {fmt(float(values[best]))} at vertex {int(shape.sample_ids[best])})")
     render_heatmap_png(shape, plot_vals, png, landmarks=L, up=guess_up(shape, up), title=title, ply=ply,
                        cmap="turbo")
     info(f"wrote {png}" + (f" and {ply}" if ply else ""))
     out = {
         "landmarks": [int(v) for v in shape.sample_ids[L]],
-        "sigma_before": hm.sigma_before,
+        "score": score,
+        "epsilon": epsilon if score == "scale" else None,
+        "sigma_before": before,
         "samples": shape.sample_ids,
-        "values": [None if np.isnan(v) else float(v) for v in hm.values],
+        "values": [None if np.isnan(v) else float(v) for v in values],
         "best": int(shape.sample_ids[best]),
-        "best_value": float(hm.values[best]),
+        "best_value": float(values[best]),
         "seconds": time.perf_counter() - t0,
     }
     if as_json:
         emit_json(out)
     else:
-        click.echo(f"sigma before: {fmt(hm.sigma_before)}; best landmark: vertex {out['best']} "
-                   f"(sigma {fmt(out['best_value'])}); {out['seconds']:.1f} s")
+        click.echo(f"{name} before: {fmt(before)}; best landmark: vertex {out['best']} "
+                   f"({name} {fmt(out['best_value'])}); {out['seconds']:.1f} s")

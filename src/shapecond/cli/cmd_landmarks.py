@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ..landmarks import METHODS, select_landmarks
+from ..landmarks import METHODS, SCORES, select_landmarks
 from .common import (build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
                      pop_shape_options, progress_enabled, shape_options)
 
@@ -40,19 +40,26 @@ def draw_landmarks(shape, result, png, ply, up, title):
 @shape_options
 @click.option("-k", "k", type=int, required=True, help="Number of landmarks (method user: 0 = all given).")
 @click.option("--method", type=click.Choice(METHODS), default="cnbs", show_default=True,
-              help="cnbs: condition number based sampling; fps; pls (Tevs et al., reimplemented); "
-                   "hks (heat kernel signature extrema); user (--user-landmarks); cnbs-local.")
+              help="cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the "
+                   "scale-aware score δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel "
+                   "signature extrema); user (--user-landmarks); cnbs-local.")
 @click.option("--user-landmarks", default=None, help="For --method user: vertex ids (comma-separated) or a file.")
 @click.option("--scores/--no-scores", default=None,
               help="Compute the symmetry score after each landmark (always on for cnbs; for the "
                    "baselines it costs one witness search per landmark).")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Effort of the witness searches.")
+@click.option("--score", "score", type=click.Choice(SCORES), default=None,
+              help="Score after each landmark: sigma (the paper's) or scale (δ(ε)) "
+                   "[default: scale for cnbs-scale, sigma otherwise].")
+@click.option("--epsilon", type=float, default=None,
+              help="Distortion level ε of the scale-aware score [default: the median sample spacing].")
 @click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the landmarks (PNG).")
 @click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh with landmarks painted (PLY).")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
-def command(input_spec, k, method, user_landmarks, scores, effort, png, ply, up, as_json, **kwargs):
+def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilon, png, ply, up, as_json,
+            **kwargs):
     """Choose K landmarks and report the symmetry score after each one.
 
     Landmarks are vertex ids of INPUT (rows for a distance matrix), in order; scores
@@ -70,19 +77,21 @@ def command(input_spec, k, method, user_landmarks, scores, effort, png, ply, up,
     kw = {}
     if method == "user":
         kw["ids"] = user_ids
-    if method == "cnbs" and progress_enabled():
+    if method in ("cnbs", "cnbs-scale") and progress_enabled():
         kw["progress"] = lambda step, done, total: click.echo(
             f"\rlandmark {step + 1}/{k}: heat map {done}/{total}", err=True, nl=done == total)
-    result = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **kw)
+    result = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, score=score,
+                              epsilon=epsilon, **kw)
     title = f"{method}: " + ", ".join(f"{v}" for v in result.landmarks)
     if png or ply:
         draw_landmarks(shape, result, png, ply, guess_up(shape, up), title)
     d = result.to_dict()
     if as_json:
-        emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds")})
+        emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds", "score")})
     else:
+        name = "delta" if result.score == "scale" else "sigma"
         if result.initial_score is not None:
-            click.echo(f"sigma without landmarks: {fmt(result.initial_score)}")
+            click.echo(f"{name} without landmarks: {fmt(result.initial_score)}")
         for i, (v, s) in enumerate(zip(result.landmarks, result.scores), 1):
-            click.echo(f"{i:3d}  vertex {v:>8d}  sigma after: {fmt(s)}")
+            click.echo(f"{i:3d}  vertex {v:>8d}  {name} after: {fmt(s)}")
         click.echo(f"{method}, {shape.n_samples} samples, {result.seconds:.2f} s")

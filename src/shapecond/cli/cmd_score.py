@@ -2,8 +2,9 @@
 
 Prints σ lower/upper/exact, the size-free σ̂ = σ√N, the condition-number
 bracket σ ≤ κ ≤ 2σ + 1 (Theorem 4.1), the witness map (the near-isometry that
-makes the shape hard to match) and, for dense targets on a mesh, whether the
-witness is a symmetry within sampling resolution (issue 4).
+makes the shape hard to match), for dense targets on a mesh whether the
+witness is a symmetry within sampling resolution, and the scale-aware score
+δ(ε) with its own witness (``shapecond.symmetry.scale``).
 """
 
 from __future__ import annotations
@@ -12,14 +13,15 @@ import click
 import numpy as np
 
 from ..symmetry.resolution import resolution_for_shape
+from ..symmetry.scale import scale_score
 from ..symmetry.score import symmetry_score
 from .common import build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
     pop_shape_options, shape_options
 
 
 def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                 effort="default") -> tuple[dict, object]:
-    """JSON-ready report of one metric shape (keys of issue 3 item 9 and issue 4 item 4)."""
+                 effort="default", epsilon=None) -> tuple[dict, object]:
+    """JSON-ready report of one metric shape: σ, κ, witness, resolution and ``scale`` (δ(ε))."""
     lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
     sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
                         seed=seed, effort=effort)
@@ -33,6 +35,11 @@ def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=1
         out["witness_vertices"] = None
     else:
         out["witness_vertices"] = [int(v) for v in shape.target_ids[sc.witness]]
+    scale = scale_score(shape.D, shape.n_points, lm, epsilon, seed=seed, effort=effort,
+                        starts=[sc.witness, *sc.maps])
+    out["scale"] = scale.to_dict()
+    out["scale"]["witness_vertices"] = (None if shape.geometry is None
+                                        else [int(v) for v in shape.target_ids[scale.witness]])
     return out, sc
 
 
@@ -50,8 +57,14 @@ def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=1
               show_default=True, help="Work spent by the witness search.")
 @click.option("--witness-png", type=click.Path(dir_okay=False), default=None,
               help="Write a picture of the witness map (meshes and point clouds).")
+@click.option("--epsilon", type=float, default=None,
+              help="Distortion level of the scale-aware score δ(ε), RMS, in diameters "
+                   "[default: the median sample spacing].")
+@click.option("--scale-witness-png", type=click.Path(dir_okay=False), default=None,
+              help="Write a picture of the scale-aware witness (the widest map within ε).")
 @json_option
-def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png, as_json, **kw):
+def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png, epsilon, scale_witness_png,
+            as_json, **kw):
     """How hard is INPUT to match: σ bracket, κ bracket and the witness map."""
     import time
 
@@ -63,14 +76,17 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
     loaded = load_geometry_or_matrix(input_spec, opts.get("largest_component", False), opts.get("symmetry_map"))
     shape = build_shape(input_spec, landmarks=ids, loaded=loaded, **opts)
     report, sc = score_report(shape, ids, exact=True if exact else "auto", upper=upper,
-                              time_limit=time_limit, seed=opts.get("seed", 0), effort=effort)
-    if witness_png:
+                              time_limit=time_limit, seed=opts.get("seed", 0), effort=effort,
+                              epsilon=epsilon)
+    for png, witness in ((witness_png, sc.witness), (scale_witness_png, report["scale"]["witness"])):
+        if not png:
+            continue
         if shape.geometry is None:
-            info("--witness-png needs a mesh or point cloud; no picture written")
+            info("a witness picture needs a mesh or point cloud; no picture written")
         else:
             from ..viz.witness import render_witness_png
 
-            render_witness_png(shape, sc.witness, witness_png, landmarks=tuple(sc.landmarks))
+            render_witness_png(shape, np.asarray(witness), png, landmarks=tuple(sc.landmarks))
     report["seconds"] = time.perf_counter() - t0  # everything, geodesics included
     if as_json:
         emit_json(report)
@@ -87,6 +103,11 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
         r = report["resolution"]
         click.echo(f"resolution        {r['flag']} (sigma {fmt(r['sigma_lo'])} at M={r['n_targets_lo']}, "
                    f"{fmt(r['sigma_hi'])} at M={r['n_targets_hi']}; covering radius {fmt(r['covering_radius'])})")
+    d = report["scale"]
+    click.echo(f"delta(eps)        {fmt(d['displacement'])} at eps {fmt(d['epsilon'])} (x{fmt(d['amplification'])}): "
+               f"the widest self-map distorting distances by at most eps moves the samples "
+               f"{fmt(d['displacement'])} RMS ({100 * d['moved']:.0f} % of them"
+               + (", an exact isometry)" if d["isometry"] else ")"))
     for note in report["notes"]:
         info(f"note: {note}")
     click.echo(f"seconds           {report['seconds']:.2f}")

@@ -4,6 +4,9 @@
 ``MetricShape`` and reports them in order with the global symmetry score after each:
 
 * ``"cnbs"``: Condition Number Based Sampling on the global score (``cnbs``);
+* ``"cnbs-scale"``: CNBS on the scale-aware score δ(ε) (``shapecond.symmetry.scale``):
+  each landmark lowers most the displacement of the widest self-map whose distortion
+  stays within ε; its scores are δ after each landmark;
 * ``"cnbs-local"``: CNBS on the local score of deformation-based matching
   (``shapecond.deformation.heatmap``; its scores are local scores σ_∞, landmarks are
   mesh vertices, not necessarily samples);
@@ -15,24 +18,43 @@
 
 from __future__ import annotations
 
+import math
 import time
 
 from ..errors import InputError
 from .result import LandmarkResult, make_result, sample_of_vertex
 
-METHODS = ("cnbs", "cnbs-local", "fps", "pls", "hks", "user")
+METHODS = ("cnbs", "cnbs-scale", "cnbs-local", "fps", "pls", "hks", "user")
+#: Which score follows each landmark: σ (Eq. 5) or δ(ε) (``shapecond.symmetry.scale``).
+SCORES = ("sigma", "scale")
 
 
-def prefix_scores(shape, sample_indices, fixed=(), seed: int = 0, effort: str = "default") -> list[float]:
-    """σ (lower bound with witness, Eq. 5) with the first 1, 2, ... landmarks fixed."""
+def monotone(values) -> list:
+    """Lower bounds after 1, 2, ... landmarks made non-increasing: a map fixing more
+    landmarks also fixes fewer, so a later bound is a bound of every earlier score too."""
+    out, hi = list(values), -math.inf
+    for i in range(len(out) - 1, -1, -1):
+        if out[i] is not None:
+            hi = max(hi, out[i])
+            out[i] = hi
+    return out
+
+
+def prefix_scores(shape, sample_indices, fixed=(), seed: int = 0, effort: str = "default",
+                  score: str = "sigma", epsilon=None) -> list[float]:
+    """σ (Eq. 5) or δ(ε) (lower bounds with witness) with the first 1, 2, ... landmarks fixed."""
+    from ..symmetry.scale import scale_score
     from ..symmetry.search import witness_search
 
     out, L = [], [int(v) for v in fixed]
     for s in sample_indices:
         L.append(int(s))
-        out.append(float(witness_search(shape.D, n_samples=shape.n_samples, landmarks=L, seed=seed,
-                                        effort=effort).sigma))
-    return out
+        if score == "scale":
+            out.append(scale_score(shape.D, shape.n_samples, L, epsilon, seed=seed, effort=effort).displacement)
+        else:
+            out.append(float(witness_search(shape.D, n_samples=shape.n_samples, landmarks=L, seed=seed,
+                                            effort=effort).sigma))
+    return monotone(out)
 
 
 def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
@@ -57,7 +79,8 @@ def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
 
 
 def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scores: bool | None = None,
-                     effort: str = "default", fixed=(), **kw) -> LandmarkResult:
+                     effort: str = "default", fixed=(), score: str | None = None, epsilon=None,
+                     **kw) -> LandmarkResult:
     """Choose ``k`` landmarks on ``shape`` with ``method``.
 
     Parameters
@@ -70,6 +93,10 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
         default True for "cnbs" (free: the heat map gives them), False otherwise.
     effort : effort of the witness searches ("quick", "default", "thorough").
     fixed : sample indices fixed before selection (they are not reported again).
+    score : "sigma" or "scale", the score reported after each landmark; default
+        "scale" for "cnbs-scale", "sigma" otherwise (cnbs always reports σ).
+    epsilon : distortion level of the scale-aware score (default:
+        ``symmetry.scale.default_epsilon``).
     **kw : method options: cnbs (``resolve_fraction``, ``resolve``, ``n_maps``,
         ``progress``, ``keep_heat_maps``), cnbs-local (``alpha``, ``energy``, ``refine``),
         hks (``time_fraction``, ``n_eigs``),
@@ -81,6 +108,9 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     """
     if method not in METHODS:
         raise InputError(f"unknown landmark method {method!r}; choose one of {', '.join(METHODS)}")
+    score = score or ("scale" if method == "cnbs-scale" else "sigma")
+    if score not in SCORES:
+        raise InputError(f"unknown score {score!r}; choose sigma or scale")
     n = int(shape.n_samples)
     if method != "user" and not 1 <= k <= n - len(fixed) - 1:
         raise InputError(f"k must lie between 1 and {n - len(fixed) - 1} for {n} samples, got {k}")
@@ -92,6 +122,21 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
         out = cnbs_landmarks(shape.D, n, k, fixed=fixed, seed=seed, effort=effort, **kw)
         chosen, sc, initial = out["landmarks"], out["scores"], out["initial_score"]
         heat_maps = tuple(out["heat_maps"])
+        score = "sigma"
+    elif method == "cnbs-scale":
+        from ..symmetry.scale import budget_of, default_epsilon
+        from .cnbs import cnbs_landmarks
+
+        eps = default_epsilon(shape.D, n) if epsilon is None else float(epsilon)
+        out = cnbs_landmarks(shape.D, n, k, fixed=fixed, seed=seed, effort=effort,
+                             budget=budget_of(eps, n, shape.D), **kw)
+        # heat-map values are sqrt(d²): RMS displacement δ = value / sqrt(N)
+        chosen = out["landmarks"]
+        sc = monotone([v / math.sqrt(n) for v in out["scores"]])
+        initial = max(out["initial_score"] / math.sqrt(n), sc[0] if sc else 0.0)
+        heat_maps = tuple(out["heat_maps"])
+        if score == "sigma":  # σ after each landmark (computed below when asked for)
+            sc, initial = None, None
     elif method == "cnbs-local":
         verts, sc, initial = _local_landmarks(shape, k, fixed, **kw)
         samples = [sample_of_vertex(shape, v) for v in verts]
@@ -118,8 +163,8 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
             chosen = chosen[:k]
     if sc is None:
         want = scores if scores is not None else False
-        sc = prefix_scores(shape, chosen, fixed, seed, effort) if want else [None] * len(chosen)
-    return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps)
+        sc = prefix_scores(shape, chosen, fixed, seed, effort, score, epsilon) if want else [None] * len(chosen)
+    return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps, score)
 
 
-__all__ = ["LandmarkResult", "METHODS", "prefix_scores", "select_landmarks"]
+__all__ = ["LandmarkResult", "METHODS", "SCORES", "monotone", "prefix_scores", "select_landmarks"]

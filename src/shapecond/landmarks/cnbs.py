@@ -96,6 +96,19 @@ def swap_scores(D: np.ndarray, n: int) -> np.ndarray:
     return s
 
 
+def swap_table(D: np.ndarray, n: int, budget=None) -> np.ndarray:
+    """Value of every single swap (a b) in the units of the heat map: σ (``swap_scores``),
+    or with a Dist² ``budget`` sqrt(d²) = sqrt(2)·D[a,b] for the swaps within it and 0 for the others."""
+    if budget is None:
+        return swap_scores(D, n)
+    from ..symmetry.search import swap_terms
+
+    num, den = swap_terms(np.asarray(D, float)[:n, :n], np.arange(n))
+    S = np.where(den <= budget, np.sqrt(num), 0.0)
+    np.fill_diagonal(S, 0.0)
+    return S
+
+
 def best_swap_avoiding(S: np.ndarray, fixed, candidates) -> np.ndarray:
     """For each candidate p, the best swap score over pairs avoiding ``fixed`` ∪ {p}."""
     S = S.copy()
@@ -172,7 +185,7 @@ def _maps_of(res, n_maps):
 def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: str = "default",
              n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
              resolve: str = "ils", n_kicks: int = N_KICKS, n_cross: int = 24, max_verify: int = 8,
-             prune: bool = False, progress=None) -> HeatMap:
+             prune: bool = False, progress=None, budget=None) -> HeatMap:
     """The CNBS heat map: σ (lower bound) with each candidate sample fixed.
 
     Parameters
@@ -189,6 +202,9 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         the module docstring): the same argmin for a fraction of the work, but the
         values of the ``pruned`` candidates are weaker lower bounds.  Off for pictures.
     progress : callable(done, total) or None.
+    budget : None for σ (Eq. 5); a Dist² budget for the scale-aware score
+        (``shapecond.symmetry.scale``): values are then sqrt(d²) of the widest map
+        within the budget fixing each candidate (δ(ε) = value / sqrt(N)).
     """
     t0 = time.perf_counter()
     search = _search_module()
@@ -202,7 +218,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     if not 0.0 <= resolve_fraction <= 1.0:
         raise InputError("resolve fraction must lie in [0, 1]")
     if base is None:
-        base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
+        base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort, budget=budget)
     sigma0 = float(base.sigma)
     maps = _maps_of(base, n_maps)
     cand = np.array([p for p in range(n) if p not in set(L)], dtype=np.int64)
@@ -213,10 +229,10 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     for t in maps:
         moved = np.maximum(moved, D[np.arange(n), t])
     floor = np.zeros(n)
-    floor[cand] = best_swap_avoiding(swap_scores(D, n), L, cand)
+    floor[cand] = best_swap_avoiding(swap_table(D, n, budget), L, cand)
     results = {}
     best_t = maps[0]
-    polish = WarmPolisher(D, n, maps, L)
+    polish = WarmPolisher(D, n, maps, L, budget)
     n_full = int(math.ceil(resolve_fraction * cand.size))
     order = cand[np.lexsort((cand, -moved[cand]))]  # the tie-break order of HeatMap.argmin
     to_resolve = np.zeros(n, dtype=bool)
@@ -244,7 +260,8 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         if cut or not to_resolve[p]:
             return cut
         if resolve == "full":
-            r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort)
+            r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort,
+                                      budget=budget)
         else:  # "ils": kicked copies of the repaired base maps, polished
             r, cut = polish.bounded(L + [p], p, rng=rng, n_kicks=n_kicks, stop=stop)
         resolved[p] = True
@@ -287,7 +304,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         if resolve == "full" or n <= FULL_VERIFY_N:
             own = [results[c].witness] if c in results else []
             r2 = search.witness_search(D, n_samples=n, landmarks=L + [c], seed=seed, starts=own,
-                                       effort=effort)
+                                       effort=effort, budget=budget)
             r = r2 if r is None or float(r2.sigma) > float(r.sigma) else r
         if r is not None and float(r.sigma) > values[c]:
             values[c] = float(r.sigma)
@@ -297,7 +314,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     return HeatMap(values, sigma0, tuple(L), moved, resolved, pruned, results, time.perf_counter() - t0)
 
 
-def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = "default"):
+def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = "default", budget=None):
     """Reference heat map: a full multistart search for every candidate (slow; tests, benchmarks)."""
     search = _search_module()
     D = np.asarray(D, dtype=float)
@@ -307,25 +324,29 @@ def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = 
     for p in range(n):
         if p not in L:
             values[p] = float(search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed,
-                                                    effort=effort).sigma)
+                                                    effort=effort, budget=budget).sigma)
     return values
 
 
-def _swap_witness(D, n, L, base):
-    S = swap_scores(D, n)
+def _swap_witness(D, n, L, base, budget=None):
+    S = swap_table(D, n, budget)
     S[L, :] = -np.inf
     S[:, L] = -np.inf
     np.fill_diagonal(S, -np.inf)
     a, b = divmod(int(np.argmax(S)), n)
     t = np.arange(n, dtype=np.int64)
     t[a], t[b] = b, a
-    return WarmPolisher(D, n, _maps_of(base, N_MAPS), L[:-1])(L, L[-1], extra_starts=[t])
+    return WarmPolisher(D, n, _maps_of(base, N_MAPS), L[:-1], budget)(L, L[-1], extra_starts=[t])
 
 
 def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
                    n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
-                   resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False):
+                   resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False,
+                   budget=None):
     """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
+
+    ``budget``: None for the paper's σ; a Dist² budget for the scale-aware score
+    (``heat_map``), the ``cnbs-scale`` method.
 
     Returns
     -------
@@ -339,20 +360,21 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
     L = [int(v) for v in fixed]
     if k < 0 or k + len(L) > n:
         raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(L)} already fixed)")
-    base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
+    base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort, budget=budget)
     initial = float(base.sigma)
     new, scores, maps = [], [], []
     for step in range(k):
         hm = heat_map(D, n, L, base=base, seed=seed, effort=effort, n_maps=n_maps,
                       resolve_fraction=resolve_fraction, resolve=resolve, prune=prune,
-                      progress=(lambda d, t, s=step: progress(s, d, t)) if progress else None)
+                      progress=(lambda d, t, s=step: progress(s, d, t)) if progress else None,
+                      budget=budget)
         c = hm.argmin()
         new.append(c)
         scores.append(float(hm.values[c]))
         prev, base = base, hm.results.get(c)
         if base is None or float(base.sigma) < hm.values[c]:
             # the single-swap floor won: continue from a witness that attains it
-            base = _swap_witness(D, n, L + [c], base or prev)
+            base = _swap_witness(D, n, L + [c], base or prev, budget)
         L.append(c)
         if keep_heat_maps:
             maps.append(hm)

@@ -36,6 +36,8 @@ class LandmarkResult:
         σ with none of the selected landmarks fixed.
     heat_maps : tuple of arrays
         CNBS only: per step, σ with each sample fixed (inf-safe); empty otherwise.
+    score : "sigma" (σ, Eq. 5) or "scale" (δ(ε), ``shapecond.symmetry.scale``): what
+        ``scores`` and ``initial_score`` are.
     """
 
     landmarks: tuple
@@ -46,6 +48,7 @@ class LandmarkResult:
     seconds: float
     initial_score: float | None = None
     heat_maps: tuple = field(default=(), repr=False)
+    score: str = "sigma"
 
     def to_dict(self) -> dict:
         """JSON-ready dict (keys of the CLI: landmarks, scores, method, seconds, ...)."""
@@ -56,6 +59,7 @@ class LandmarkResult:
             "seconds": float(self.seconds),
             "sample_indices": [int(v) for v in self.sample_indices],
             "initial_score": None if self.initial_score is None else float(self.initial_score),
+            "score": self.score,
         }
 
 
@@ -80,7 +84,8 @@ def sample_of_vertex(shape, vertex: int) -> int:
     return j if j < n else int(np.argmin(shape.D[j, :n]))
 
 
-def make_result(shape, sample_indices, scores, method, seconds, initial_score=None, heat_maps=()):
+def make_result(shape, sample_indices, scores, method, seconds, initial_score=None, heat_maps=(),
+                score="sigma"):
     """Assemble a ``LandmarkResult`` from sample indices (adds ids and vertices)."""
     s = [int(i) for i in sample_indices]
     verts = [int(shape.samples[i]) for i in s]
@@ -89,4 +94,4 @@ def make_result(shape, sample_indices, scores, method, seconds, initial_score=No
     for v in scores:
         clean.append(None if v is None else (math.inf if not math.isfinite(v) and v > 0 else float(v)))
     return LandmarkResult(tuple(ids), tuple(s), tuple(verts), tuple(clean), method, float(seconds),
-                          initial_score, tuple(heat_maps))
+                          initial_score, tuple(heat_maps), score)

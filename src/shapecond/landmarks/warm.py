@@ -14,6 +14,19 @@ import math
 import numpy as np
 
 
+#: With a budget (the scale-aware score), a base map whose distances from the candidate p
+#: are off by more than sqrt(HOPELESS) = 2 times the RMS budget once p is fixed is not
+#: searched from: no nearby map is feasible with p fixed, and unwinding it costs O(N)
+#: moves of O(N·M) each.  Values stay lower bounds (they come from the other maps).
+HOPELESS = 4.0
+
+
+def _used(t, m):
+    used = np.zeros(m, dtype=bool)
+    used[t] = True
+    return used
+
+
 def _search_module():
     from ..symmetry import search
 
@@ -34,9 +47,13 @@ class WarmPolisher:
     the dense-target neighbour lists) and ``MapPool``.
     """
 
-    def __init__(self, D, n, maps, landmarks=()):
+    def __init__(self, D, n, maps, landmarks=(), budget=None):
         from ..symmetry import _kernels as K
         from ..symmetry import objective as obj
+
+        # the objective: σ² (ratio), or d² within a Dist² budget (the scale-aware score)
+        self.budget = budget
+        self.mode, self.s = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
 
         self.K, self.obj, self.search = K, obj, _search_module()
         self.D = np.ascontiguousarray(np.asarray(D, dtype=np.float64))
@@ -60,9 +77,9 @@ class WarmPolisher:
             H = np.sum(self.D[t, :] ** 2, axis=0)
             used = np.zeros(m, dtype=bool)
             used[t] = True
-            d2v, dist2v, _ = K.local_search(self.D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0,
+            d2v, dist2v, _ = K.local_search(self.D, n, t, G, H, free, self.knn, used, self.mode, self.s,
                                             obj.d2(self.D, t), obj.dist2(self.D, t), self.floor, 50 * n,
-                                            np.inf)
+                                            np.inf, lm, obj.anchor_rows(self.D, t, lm), self.s / n)
             key = t.tobytes()
             if key not in seen:
                 seen.add(key)
@@ -112,15 +129,22 @@ class WarmPolisher:
         free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
         found = {}  # map bytes -> (tracked ratio d²/Dist², map)
 
-        def keep(t, d2v, dist2v):
-            r = 0.0 if d2v <= 0.0 else (math.inf if dist2v <= self.floor else d2v / dist2v)
+        lb = self.s / n
+
+        def keep(t, d2v, dist2v, rows):
+            if self.budget is not None:
+                exc = max(dist2v - self.budget, 0.0) + float(np.sum(np.maximum(rows - lb, 0.0)))
+                r = d2v if exc == 0.0 else -exc
+            else:
+                r = 0.0 if d2v <= 0.0 else (math.inf if dist2v <= self.floor else d2v / dist2v)
             found.setdefault(t.tobytes(), (r, t))
             return r > stop2
 
         def search(t, G, H, used, d2v, dist2v):
-            d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, K.MODE_RATIO, 0.0, d2v,
-                                            dist2v, self.floor, 50 * n, stop2)
-            return keep(t, d2v, dist2v)
+            rows = obj.anchor_rows(D, t, lm)
+            d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, self.mode, self.s, d2v,
+                                            dist2v, self.floor, 50 * n, stop2, lm, rows, lb)
+            return keep(t, d2v, dist2v, rows)
 
         jobs = [(b, 0) for b in range(len(self.base))]
         if rng is not None and self.base:
@@ -130,11 +154,18 @@ class WarmPolisher:
         for b, size in jobs:
             t0, _, _, d20, dist20 = self.base[b]
             if size == 0 and t0[p] == p and np.all(t0[lm] == lm):
-                pruned = keep(t0, d20, dist20)  # still a local optimum with p fixed: nothing to search
+                # still a local optimum with p fixed (for σ; with a budget, p's row may now break it)
+                if self.budget is None:
+                    pruned = keep(t0, d20, dist20, None)
+                else:
+                    pruned = search(t0.copy(), self.base[b][1].copy(), self.base[b][2].copy(),
+                                    _used(t0, m), d20, dist20)
             else:
                 t, G, H, used, d2v, dist2v = self._repaired(b, p)
                 if np.any(t[lm] != lm):
                     continue  # a base map that moves a landmark (cannot happen for true warm maps)
+                if self.budget is not None and obj.anchor_rows(D, t, [p])[0] > HOPELESS * lb:
+                    continue  # p kills this map (see HOPELESS)
                 for _ in range(size - 1):
                     a, c = rng.choice(free, size=2, replace=False)
                     dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
@@ -152,15 +183,15 @@ class WarmPolisher:
             if search(t, G, H, used, obj.d2(D, t), obj.dist2(D, t)):
                 pruned = True
                 break
-        return self._result(found), pruned
+        return self._result(found, lm), pruned
 
-    def _result(self, found):
+    def _result(self, found, anchors=()):
         """SearchResult of the best maps found, the best two re-scored exactly."""
         # rank by the tracked values (rank-1 updates, exact up to round-off); the best
         # two are re-scored exactly, so the reported σ is the exact σ of its witness
         n = self.n
-        ranked = sorted(found.values(), key=lambda it: -it[0])[: self.search.KEEP]
-        pool = self.search.MapPool(self.D, n)
+        ranked = [it for it in sorted(found.values(), key=lambda it: -it[0]) if it[0] > 0][: self.search.KEEP]
+        pool = self.search.MapPool(self.D, n, self.budget, anchors)
         for _, t in ranked[:2]:
             pool.add(t)
         exact = pool.top(2)
@@ -169,6 +200,7 @@ class WarmPolisher:
         v, t, num, den = exact[0]
         maps = [t] + [u for _, u in ranked if u.tobytes() != t.tobytes()]
         sig = [math.inf if v == math.inf else math.sqrt(v)]
-        sig += [math.inf if r == math.inf else math.sqrt(r) for r, u in ranked if u.tobytes() != t.tobytes()]
+        sig += [math.inf if r == math.inf else math.sqrt(max(r, 0.0)) for r, u in ranked
+                if u.tobytes() != t.tobytes()]
         return self.search.SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den,
                                         maps=tuple(maps), sigmas=tuple(sig), seconds=0.0)

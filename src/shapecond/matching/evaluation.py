@@ -61,7 +61,7 @@ DEFAULT_LANDMARKS = 10
 #: Which samples a target has (module docstring).
 PROTOCOLS = ("corresponding", "independent")
 #: bump when the landmark methods change, to invalidate cached selections
-LANDMARK_CACHE_VERSION = "3"
+LANDMARK_CACHE_VERSION = "4"
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 
@@ -355,7 +355,9 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
     that Figure 7a compares one estimator: CNBS's own heat-map values are lower
     bounds from warm starts and would not be comparable with the baselines'.
     ``floor``: the best single swap with the same landmarks, to show when a score
-    is only that.
+    is only that.  ``scale``: the scale-aware score δ(ε) (``symmetry.scale``, quick
+    search, default ε) after 1, 3 and k landmarks, made non-increasing (a map
+    fixing more landmarks is feasible with fewer).
     """
     import json
 
@@ -370,8 +372,8 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
     if cache and path.exists():
         try:
             d = json.loads(path.read_text())
-            d["scores"] = {int(c): float(v) for c, v in d["scores"].items()}
-            d["floor"] = {int(c): float(v) for c, v in d["floor"].items()}
+            for key in ("scores", "floor", "scale"):
+                d[key] = {int(c): float(v) for c, v in d[key].items()}
             return d
         except (ValueError, KeyError):
             path.unlink(missing_ok=True)
@@ -380,12 +382,18 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
     sel = landmark_method(method)(shape, k, seed)
     idx = [int(i) for i in sel["sample_indices"]][:k]
     seconds = time.perf_counter() - t0
-    scores, floor = {}, {}
-    for c in sorted({1, min(3, len(idx)), len(idx)}):
+    from shapecond.landmarks import monotone
+    from shapecond.symmetry.scale import scale_score
+
+    scores, floor, scale = {}, {}, {}
+    counts = sorted({1, min(3, len(idx)), len(idx)})
+    for c in counts:
         scores[c] = symmetry_score(shape.D, shape.n_samples, idx[:c], seed, True)
         floor[c] = swap_floor(shape.D, shape.n_samples, idx[:c])
+        scale[c] = scale_score(shape.D, shape.n_samples, idx[:c], seed=seed, effort="quick").displacement
+    scale = dict(zip(counts, monotone([scale[c] for c in counts])))
     out = dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
-               ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, floor=floor,
+               ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, floor=floor, scale=scale,
                seconds=seconds, score_source="search")
     if cache:
         try:
@@ -408,7 +416,7 @@ class Evaluation:
     seconds: dict = field(default_factory=dict)
 
 
-def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "cnbs"),
+def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "cnbs", "cnbs-scale"),
                      matchers=("lh05", "faq"), n_jobs=1, scheduler=None, quick=False,
                      n_points=None, seed=0, backend="heat", cache=True, progress=False,
                      max_targets=None, protocol="corresponding") -> Evaluation:

@@ -51,8 +51,8 @@ def score_table(landmarks, key="scores"):
             for d in landmarks}
 
 
-def _cells(ev, matcher, cls=None):
-    scores = score_table(ev.landmarks)
+def _cells(ev, matcher, cls=None, key="scores"):
+    scores = score_table(ev.landmarks, key)
     xs, ys = [], []
     for (c_, method, c, m), e in mean_errors(ev.records).items():
         s = scores.get((c_, method), {}).get(c)
@@ -62,24 +62,26 @@ def _cells(ev, matcher, cls=None):
     return xs, ys
 
 
-def correlation(ev, matcher):
+def correlation(ev, matcher, key="scores"):
     """Spearman ρ (and p) between score and mean error over (class, method, count) cells.
+
+    ``key``: "scores" (σ, Eq. 5) or "scale" (δ(ε), ``shapecond.symmetry.scale``).
 
     Pooled over classes, so differences between classes count too (a class
     with higher scores and higher errors raises ρ); see ``within_class``.
     """
-    xs, ys = _cells(ev, matcher)
+    xs, ys = _cells(ev, matcher, key=key)
     if len(xs) < 3 or len(set(xs)) < 2 or len(set(ys)) < 2:
         return math.nan, math.nan, len(xs)
     res = spearmanr(xs, ys)
     return float(res.statistic), float(res.pvalue), len(xs)
 
 
-def within_class(ev, matcher):
+def within_class(ev, matcher, key="scores"):
     """Mean over classes of Spearman ρ computed inside each class (NaN-free classes only)."""
     rhos = []
     for cls in ev.settings["classes"]:
-        xs, ys = _cells(ev, matcher, cls)
+        xs, ys = _cells(ev, matcher, cls, key)
         if len(xs) >= 3 and len(set(xs)) > 1 and len(set(ys)) > 1:
             rhos.append(float(spearmanr(xs, ys).statistic))
     return (float(np.mean(rhos)) if rhos else math.nan), len(rhos)
@@ -128,6 +130,17 @@ def markdown(ev, plots=()) -> str:
             cells.append(" / ".join(_fmt(sc.get(c)) + ("*" if _at_floor(sc.get(c), fl.get(c)) else "")
                                     for c in sorted(sc)))
         out.append(f"| {cls} | {L} | " + " | ".join(cells) + " |")
+    scale = score_table(ev.landmarks, "scale")
+    if any(scale.values()):
+        out += ["", "## Scale-aware score δ(ε) after 1, 3 and all landmarks", "",
+                "RMS displacement of the widest self-map whose distortion (and that of every landmark's "
+                "distance row) stays within ε = the median sample spacing; quick search, the same for "
+                "every method.", "",
+                "| class | L | " + " | ".join(f"{m} 1 / 3 / L" for m in methods) + " |",
+                "|---|---|" + "---|" * len(methods)]
+        for cls in classes:
+            cells = [" / ".join(_fmt(v) for _, v in sorted(scale.get((cls, m), {}).items())) for m in methods]
+            out.append(f"| {cls} | {st['landmark_counts'][cls]} | " + " | ".join(cells) + " |")
     for prot in protocols(ev):
         out += _error_sections(by_protocol(ev, prot), prot, scores)
     out += ["", "## Landmarks (null shape, file vertex ids)", ""]
@@ -162,11 +175,12 @@ def _error_sections(ev, protocol, scores) -> list[str]:
             low = min((v, m) for m, v in sc3.items() if v is not None)[1] if any(
                 v is not None for v in sc3.values()) else "-"
             out.append(f"| {cls} | " + " | ".join(cells) + f" | {best} | {low} |")
-        rho, p, n = correlation(ev, matcher)
-        rw, nw = within_class(ev, matcher)
-        out += ["", f"Spearman rank correlation between score and error ({matcher}, {n} "
-                f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}; within classes "
-                f"(mean of per-class ρ over {nw} classes): {_fmt(rw)}."]
+        for key, name in (("scores", "σ"), ("scale", "δ(ε)")):
+            rho, p, n = correlation(ev, matcher, key)
+            rw, nw = within_class(ev, matcher, key)
+            out += ["", f"Spearman rank correlation between the score {name} and error ({matcher}, {n} "
+                    f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}; within classes "
+                    f"(mean of per-class ρ over {nw} classes): {_fmt(rw)}."]
     cols = ("error_area", "sample_error", "exact", "recall", "objective_ratio")
     tables = {c: mean_errors(ev.records, c) for c in cols}
     out += ["", f"## Other measures, {protocol} samples", "",
@@ -247,9 +261,14 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
 
 
 def correlations(ev) -> dict:
-    """{matcher: {rho, p, n, within_class}} of ``correlation`` and ``within_class``."""
-    return {m: dict(zip(("rho", "p", "n"), correlation(ev, m)), within_class=within_class(ev, m)[0])
-            for m in ev.settings["matchers"]}
+    """{matcher: {rho, p, n, within_class, scale: {...}}}: ``correlation`` and ``within_class``
+    of σ, and the same for the scale-aware score δ(ε) under ``scale``."""
+    out = {}
+    for m in ev.settings["matchers"]:
+        out[m] = dict(zip(("rho", "p", "n"), correlation(ev, m)), within_class=within_class(ev, m)[0])
+        out[m]["scale"] = dict(zip(("rho", "p", "n"), correlation(ev, m, "scale")),
+                               within_class=within_class(ev, m, "scale")[0])
+    return out
 
 
 def write_report(ev, out_dir) -> Path:

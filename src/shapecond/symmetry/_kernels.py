@@ -29,6 +29,7 @@ from numba import njit
 #: Objective modes of :func:`local_search`.
 MODE_RATIO = 0  # maximise d² / Dist² (σ² of the map, paper Eq. 5)
 MODE_FIXED_S = 1  # maximise d² − s·Dist² (one rung of the fixed-s ladder)
+MODE_BUDGET = 2  # maximise d² subject to Dist² ≤ s (the scale-aware score; infeasible: −excess)
 
 
 @njit(cache=True)
@@ -119,16 +120,55 @@ def _rank1(P, PT, c, w):
 
 
 @njit(cache=True)
-def _value(ratio, s, num, den, floor):
+def _value(mode, s, num, den, floor):
     """Objective of one candidate: num / max(den, floor) (σ², the identity and
-    round-off of it scoring -1), or num − s·den on a rung of the fixed-s ladder."""
-    if ratio:
+    round-off of it scoring -1), num − s·den on a rung of the fixed-s ladder, or
+    num when den ≤ s and −(den − s) otherwise (a budget: every feasible map
+    beats every infeasible one, and an infeasible one improves by losing distortion)."""
+    if mode == MODE_RATIO:
         return num / max(den, floor) if num > 0.0 else -1.0
+    if mode == MODE_BUDGET:
+        return num if den <= s else s - den
     return num - s * den
 
 
 @njit(cache=True)
-def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_moves, stop):
+def _anchored(s, num, den, rl, drl, lb):
+    """Budget value with anchor rows (``rl + drl``, each within ``lb``): num if every
+    constraint holds, else minus the total excess."""
+    exc = den - s if den > s else 0.0
+    for i in range(rl.size):
+        r = rl[i] + drl[i]
+        if r > lb:
+            exc += r - lb
+    return num if exc == 0.0 else -exc
+
+
+@njit(cache=True)
+def _swap_rows_delta(D, lrows, a, b, ta, tb, drl):
+    """Change of each anchor row Σ_x (D[l,x] − D[l,Tx])² when T(a) and T(b) are exchanged."""
+    for i in range(lrows.size):
+        l = lrows[i]
+        x1 = D[l, a] - D[l, tb]
+        x2 = D[l, b] - D[l, ta]
+        y1 = D[l, a] - D[l, ta]
+        y2 = D[l, b] - D[l, tb]
+        drl[i] = x1 * x1 + x2 * x2 - y1 * y1 - y2 * y2
+
+
+@njit(cache=True)
+def _move_rows_delta(D, lrows, a, ta, y, drl):
+    """Change of each anchor row when T(a) moves from ``ta`` to ``y``."""
+    for i in range(lrows.size):
+        l = lrows[i]
+        x1 = D[l, a] - D[l, y]
+        y1 = D[l, a] - D[l, ta]
+        drl[i] = x1 * x1 - y1 * y1
+
+
+@njit(cache=True)
+def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_moves, stop,
+                 lrows, rl, lb):
     """Best-improvement local search over swaps and nearby reassignments.
 
     Parameters
@@ -139,15 +179,20 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
     free : int64 indices of the samples that may move (non-landmarks).
     knn : (M, k) int64 nearest targets of each target (k = 0 when M == n:
         no reassignment moves).
-    mode : ``MODE_RATIO`` or ``MODE_FIXED_S`` (parameter ``s``).
+    mode : ``MODE_RATIO``, ``MODE_FIXED_S`` or ``MODE_BUDGET`` (parameter ``s``).
     d2, dist2 : current d²(T) and Dist²(T).
     floor : Dist² values below it count as ``floor`` (a ratio never divides by
         round-off; isometries are decided exactly by the caller).
     max_moves : cap on accepted moves.
-    stop : in ``MODE_RATIO``, stop as soon as the current value d²/Dist² exceeds
-        ``stop`` (``np.inf``: never).  The value only grows during the search, so a
-        caller looking for a minimum over several searches (the CNBS heat map's
-        argmin) learns all it needs once a search passes the incumbent.
+    stop : stop as soon as the current value exceeds ``stop`` (``np.inf``:
+        never).  The value only grows during the search, so a caller looking for
+        a minimum over several searches (the CNBS heat map's argmin) learns all it
+        needs once a search passes the incumbent.
+    lrows, rl, lb : ``MODE_BUDGET`` only: anchor rows (landmark samples), their
+        current distortions ``rl[i] = Σ_x (D[l,x] − D[l,Tx])²`` (updated in place)
+        and the budget ``lb`` each must stay within (empty ``lrows``: none).  A
+        move's value with anchors never exceeds its value without them, so the
+        anchor terms (O(L)) are evaluated only for moves that would be the best.
 
     Returns
     -------
@@ -176,10 +221,12 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
     pd = np.empty(n)
     dd = np.empty(n)
     buf = np.empty(n)
-    ratio = mode == MODE_RATIO
+    nl = lrows.size if mode == MODE_BUDGET else 0
+    drl = np.zeros(lrows.size)
+    zero = np.zeros(lrows.size)
     while moves < max_moves:
-        cur = _value(ratio, s, d2, dist2, floor)
-        if ratio and cur > stop:
+        cur = _value(mode, s, d2, dist2, floor) if nl == 0 else _anchored(s, d2, dist2, rl, zero, lb)
+        if cur > stop:
             break
         best = cur + 1e-12 * abs(cur)
         kind = -1
@@ -199,11 +246,21 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
                 dba = DcT[a, b]
                 nd2 = b2 + dab * dab + dba * dba - dd[b]
                 nds = dist2 - 4.0 * (P[a, b] + PT[a, b] - pd[b] + 2.0 * D[a, b] * Di[a, b]) + 2.0 * bS
-                v = _value(ratio, s, nd2, nds, floor)
+                v = _value(mode, s, nd2, nds, floor)
                 buf[b] = v if isfree[b] else -np.inf
             for b in range(a + 1, n):
                 if buf[b] > best:
-                    best = buf[b]
+                    v = buf[b]
+                    if nl > 0:
+                        dab = Dc[a, b]
+                        dba = DcT[a, b]
+                        nd2 = b2 + dab * dab + dba * dba - dd[b]
+                        nds = dist2 - 4.0 * (P[a, b] + PT[a, b] - pd[b] + 2.0 * D[a, b] * Di[a, b]) + 2.0 * bS
+                        _swap_rows_delta(D, lrows, a, b, ta, t[b], drl)
+                        v = _anchored(s, nd2, nds, rl, drl, lb)
+                        if v <= best:
+                            continue
+                    best = v
                     kind = 0
                     ba = a
                     bb = b
@@ -216,7 +273,10 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
                 dS = 2.0 * (G[a, y] - pd[a])
                 dty = D[ta, y]
                 nds = dist2 + 2.0 * (H[y] - dty * dty - H[ta]) - 2.0 * dS
-                v = _value(ratio, s, nd2, nds, floor)
+                v = _value(mode, s, nd2, nds, floor)
+                if v > best and nl > 0:
+                    _move_rows_delta(D, lrows, a, ta, y, drl)
+                    v = _anchored(s, nd2, nds, rl, drl, lb)
                 if v > best:
                     best = v
                     kind = 1
@@ -237,6 +297,13 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
         if kind < 0:
             break
         ta = t[ba]
+        if nl > 0:  # the anchor rows after the chosen move
+            if kind == 0:
+                _swap_rows_delta(D, lrows, ba, bb, ta, t[bb], drl)
+            else:
+                _move_rows_delta(D, lrows, ba, ta, bb, drl)
+            for i in range(nl):
+                rl[i] += drl[i]
         if kind == 0:
             tb = t[bb]
             for y in range(M):

@@ -62,6 +62,17 @@ def dist2(D: np.ndarray, t) -> float:
     return float(np.sum((D[:n, :n] - D[np.ix_(t, t)]) ** 2))
 
 
+def anchor_rows(D: np.ndarray, t, anchors) -> np.ndarray:
+    """Σ_x (D[l, x] − D[l, T x])² for every anchor ``l`` (a landmark, T(l) = l): how much the
+    map distorts the distances to each landmark (the rows of Dist² at the landmarks)."""
+    t = _as_map(D, t)
+    a = np.asarray(anchors, dtype=np.int64)
+    if a.size == 0:
+        return np.zeros(0)
+    n = t.size
+    return np.sum((D[np.ix_(a, np.arange(n))] - D[np.ix_(a, t)]) ** 2, axis=1)
+
+
 def is_isometry(D: np.ndarray, dist2_value: float, n: int | None = None) -> bool:
     """True when a distortion ``dist2_value`` is round-off (see ``ISOMETRY_RTOL``)."""
     n = D.shape[0] if n is None else n

@@ -120,12 +120,7 @@ def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
     if free.size < 2:
         return 0.0, -1, -1
     X = D[:n, :n]
-    Kx = X @ X
-    dg = np.diag(Kx)
-    Xf = X[np.ix_(free, free)]
-    Q = dg[free][:, None] + dg[free][None, :] - 2.0 * Kx[np.ix_(free, free)] - 2.0 * Xf**2
-    num = 2.0 * Xf**2
-    den = 4.0 * np.maximum(Q, 0.0)
+    num, den = swap_terms(X, free)
     iso = (den <= (obj.ISOMETRY_RTOL**2) * float(np.sum(X**2))) & (num > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(num > 0, num / np.where(den > 0, den, 1.0), -1.0)
@@ -134,6 +129,29 @@ def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
     i, j = np.unravel_index(int(np.argmax(r)), r.shape)
     best = r[i, j]
     return (math.inf if best == np.inf else math.sqrt(max(best, 0.0))), int(free[i]), int(free[j])
+
+
+def swap_terms(X: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(d², Dist²) of every swap (a b) of two free samples, as |free| × |free| tables.
+
+    d² = 2 X[a,b]² and Dist² = 4 Σ_{x ≠ a,b} (X[x,a] − X[x,b])², all pairs from one
+    product ``X @ X`` (X = D over the samples, symmetric).
+    """
+    Kx = X @ X
+    dg = np.diag(Kx)
+    Xf = X[np.ix_(free, free)]
+    Q = dg[free][:, None] + dg[free][None, :] - 2.0 * Kx[np.ix_(free, free)] - 2.0 * Xf**2
+    return 2.0 * Xf**2, 4.0 * np.maximum(Q, 0.0)
+
+
+def widest_swap(D, n, free, budget) -> tuple[int, int]:
+    """The swap of two free samples with the largest d² among those with Dist² ≤ ``budget``
+    (``(-1, -1)`` if none)."""
+    num, den = swap_terms(np.asarray(D)[:n, :n], free)
+    num = np.where(den <= budget, num, -1.0)
+    np.fill_diagonal(num, -1.0)
+    i, j = np.unravel_index(int(np.argmax(num)), num.shape)
+    return (int(free[i]), int(free[j])) if num[i, j] > 0 else (-1, -1)
 
 
 class SearchStage:
@@ -156,8 +174,11 @@ class SearchStage:
             self.knn = np.zeros((m, 0), dtype=np.int64)
         self.floor = (obj.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2))
 
-    def polish(self, t, mode=K.MODE_RATIO, s=0.0, max_moves=None):
-        """Local search from map t; returns the new map (t is not modified)."""
+    def polish(self, t, mode=K.MODE_RATIO, s=0.0, max_moves=None, anchors=()):
+        """Local search from map t; returns the new map (t is not modified).
+
+        ``anchors``: in ``MODE_BUDGET``, landmark rows each kept within s / n.
+        """
         D, n = self.D, self.n
         t = np.array(t, dtype=np.int64)
         G = D[:n, :n] @ D[t, :]
@@ -165,20 +186,32 @@ class SearchStage:
         used = np.zeros(D.shape[0], dtype=bool)
         used[t] = True
         cap = 50 * n if max_moves is None else max_moves
+        lrows = np.asarray(anchors, dtype=np.int64)
         K.local_search(D, n, t, G, H, self.free, self.knn, used, mode, float(s),
-                       obj.d2(D, t), obj.dist2(D, t), self.floor, cap, np.inf)
+                       obj.d2(D, t), obj.dist2(D, t), self.floor, cap, np.inf,
+                       lrows, obj.anchor_rows(D, t, lrows), float(s) / n)
         return t
 
 
 class MapPool:
-    """Distinct maps with their exact scores (σ² or inf), best first."""
+    """Distinct maps with their exact scores, best first.
 
-    def __init__(self, D, n):
-        self.D, self.n, self.items = D, n, {}
+    The score is σ² (``inf`` for an isometry) or, with a ``budget``, d² for maps
+    with Dist² ≤ budget whose ``anchors`` rows (``objective.anchor_rows``) are each
+    within budget / n, and minus the total excess for the others.
+    """
+
+    def __init__(self, D, n, budget=None, anchors=()):
+        self.D, self.n, self.items, self.budget = D, n, {}, budget
+        self.anchors = np.asarray(anchors, dtype=np.int64)
 
     def value(self, t) -> tuple[float, float, float]:
         num = obj.d2(self.D, t)
         den = obj.dist2(self.D, t)
+        if self.budget is not None:
+            rows = obj.anchor_rows(self.D, t, self.anchors)
+            exc = max(den - self.budget, 0.0) + float(np.sum(np.maximum(rows - self.budget / self.n, 0.0)))
+            return (num if exc == 0.0 else -exc), num, den
         if num == 0.0:
             return 0.0, num, den
         if obj.is_isometry(self.D, den, self.n):
@@ -222,8 +255,13 @@ def _dense_kick(rng, t, free, knn, m, size):
 
 
 def witness_search(D, n_samples=None, landmarks=(), seed=0, starts=(), effort="default",
-                   time_limit=None) -> SearchResult:
+                   time_limit=None, budget=None) -> SearchResult:
     """Lower bound of σ (Eq. 5) with the map attaining it; see the module docstring.
+
+    With ``budget`` the same search maximises d²(T) over the maps with
+    Dist²(T) ≤ ``budget`` whose landmark rows ``objective.anchor_rows`` are each at
+    most ``budget / N`` instead (the scale-aware score, ``shapecond.symmetry.scale``);
+    ``sigma`` is then sqrt(d²) of the witness.
 
     Parameters
     ----------
@@ -237,12 +275,12 @@ def witness_search(D, n_samples=None, landmarks=(), seed=0, starts=(), effort="d
     time_limit : seconds; the search stops between local searches when reached.
     """
     if threadpool_limits is None:
-        return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit)
+        return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, budget)
     with threadpool_limits(limits=1, user_api="blas"):
-        return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit)
+        return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, budget)
 
 
-def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit) -> SearchResult:
+def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, budget) -> SearchResult:
     t_start = time.perf_counter()
     if effort not in EFFORTS:
         raise InputError(f"effort must be one of {sorted(EFFORTS)}, got {effort!r}")
@@ -251,7 +289,8 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit) -
     m = D.shape[0]
     rng = np.random.default_rng(seed)
     deadline = math.inf if time_limit is None else t_start + float(time_limit)
-    pool = MapPool(D, n)
+    pool = MapPool(D, n, budget, lm)
+    mode, s_obj = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
 
     def late():
         return time.perf_counter() > deadline or pool.best_value() == math.inf
@@ -261,16 +300,19 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit) -
     warm = [S.repair(t, n, m, lm) for t in starts]
     warm_bij = [t for t in warm if t.max() < n]
 
-    def run(stage, t, **kw):
+    def run(stage, t):
         if not late():
-            pool.add(stage.polish(t, **kw))
+            pool.add(stage.polish(t, mode=mode, s=s_obj, anchors=lm))
 
     # 1. best single swap (exact) and warm starts
     s_swap = 0.0
     if free.size >= 2:
         s_swap, a, b = best_single_swap(D, n, lm)
-        pool.add(S.swap_map(n, a, b))
-        run(bij, S.swap_map(n, a, b))
+        if budget is not None:  # the widest swap within the budget instead
+            a, b = widest_swap(D, n, free, budget)
+        if a >= 0:
+            pool.add(S.swap_map(n, a, b))
+            run(bij, S.swap_map(n, a, b))
     for t in warm_bij:
         run(bij, t)
     if free.size >= 3:
@@ -341,6 +383,10 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit) -
             run(dense, _dense_kick(rng, base, free, dense.knn, m,
                                    int(rng.integers(2, max(3, free.size // 10) + 1))))
     tops = [it for it in pool.top(KEEP) if it[0] > 0.0]
+    if not tops and budget is not None:  # no moving map within the budget: the identity
+        ident = np.arange(n, dtype=np.int64)
+        return SearchResult(sigma=0.0, witness=ident, d2=0.0, dist2=0.0, maps=(ident,), sigmas=(0.0,),
+                            seconds=time.perf_counter() - t_start)
     if not tops:  # cannot happen with >= 2 free samples; kept as a guard
         raise InputError("no non-identity map satisfies the landmarks")
     v, t, num, den = tops[0]

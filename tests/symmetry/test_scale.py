@@ -1,0 +1,112 @@
+"""The scale-aware score δ(ε) against enumeration of every map (N <= 8)."""
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from scipy.spatial.distance import cdist
+
+from shapecond.landmarks import monotone, select_landmarks
+from shapecond.landmarks.cnbs import full_heat_map, heat_map
+from shapecond.shapes.metric import from_distance_matrix
+from shapecond.symmetry import objective as obj
+from shapecond.symmetry.scale import budget_of, default_epsilon, scale_score
+
+
+def _points(n, seed):
+    p = np.random.default_rng(seed).uniform(size=(n, 2))
+    D = cdist(p, p)
+    return D / D.max()
+
+
+def exact_delta(D, eps, landmarks=()):
+    """max RMS displacement over the maps fixing the landmarks with RMS distortion <= eps
+    and every landmark row's RMS distortion <= eps (module docstring), by enumeration."""
+    n = D.shape[0]
+    lm = list(landmarks)
+    free = [x for x in range(n) if x not in lm]
+    best = 0.0
+    for perm in itertools.permutations(free):
+        t = np.arange(n)
+        t[free] = perm
+        budget = budget_of(eps, n, D)  # (εN)², at least the isometry round-off level
+        if obj.dist2(D, t) > budget:
+            continue
+        rows = obj.anchor_rows(D, t, lm)
+        if rows.size and rows.max() > budget / n:
+            continue
+        best = max(best, math.sqrt(obj.d2(D, t) / n))
+    return best
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from([0.5, 1.0, 2.0, 4.0]), st.integers(0, 2))
+def test_lower_bound_attained_and_exact_on_small_instances(seed, factor, n_landmarks):
+    D = _points(7, seed)
+    eps = factor * default_epsilon(D)
+    lm = list(range(n_landmarks))
+    s = scale_score(D, landmarks=lm, epsilon=eps, seed=seed)
+    # the witness is feasible and attains the reported value
+    assert math.sqrt(obj.d2(D, s.witness) / 7) == pytest.approx(s.displacement, abs=1e-12)
+    assert s.distortion <= eps * (1 + 1e-9)
+    assert all(s.witness[lm] == lm)
+    exact = exact_delta(D, eps, lm)
+    assert s.displacement <= exact + 1e-12
+    assert s.displacement == pytest.approx(exact, rel=1e-9, abs=1e-12)  # the search finds the optimum here
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.integers(0, 10_000))
+def test_monotone_in_epsilon_and_in_landmarks(seed):
+    D = _points(7, seed)
+    h = default_epsilon(D)
+    values = [exact_delta(D, f * h, [0]) for f in (0.5, 1, 2, 4)]
+    assert values == sorted(values)
+    nested = [exact_delta(D, 2 * h, list(range(k))) for k in range(4)]
+    assert nested == sorted(nested, reverse=True)
+    est = [scale_score(D, landmarks=list(range(k)), epsilon=2 * h).displacement for k in range(4)]
+    assert all(e <= v + 1e-12 for e, v in zip(est, nested))
+    assert monotone(est) == sorted(monotone(est), reverse=True)
+
+
+def test_exact_symmetry_gives_its_full_displacement():
+    """A regular hexagon plus its centre: the rotation by 60° is an isometry."""
+    ang = np.arange(6) * np.pi / 3
+    p = np.vstack([np.column_stack([np.cos(ang), np.sin(ang)]), [[0.0, 0.0]]])
+    D = cdist(p, p) / 2.0
+    rot = np.array([1, 2, 3, 4, 5, 0, 6])
+    best_iso = max(math.sqrt(obj.d2(D, t) / 7) for t in (rot, rot[rot], rot[rot[rot]]))
+    for eps in (0.0, 0.01, 0.1):
+        s = scale_score(D, epsilon=eps)
+        assert s.displacement >= best_iso - 1e-12
+        assert s.displacement == pytest.approx(exact_delta(D, eps), abs=1e-12)
+    assert scale_score(D, epsilon=0.0).isometry
+    # the centre is on every symmetry: fixing it changes nothing; fixing a vertex kills the rotations
+    assert scale_score(D, landmarks=[6], epsilon=0.0).displacement == pytest.approx(best_iso, abs=1e-12)
+    assert scale_score(_points(7, 1), epsilon=0.0).displacement == 0.0
+
+
+def test_heat_map_with_a_budget_bounds_the_full_searches():
+    D = _points(8, 3)
+    budget = budget_of(2 * default_epsilon(D), 8)
+    hm = heat_map(D, 8, [0], budget=budget)
+    full = full_heat_map(D, 8, [0], budget=budget)
+    free = np.arange(1, 8)
+    # every value is sqrt(d²) of a feasible map: at most the exact optimum with p fixed
+    for p in free:
+        exact = exact_delta(D, 2 * default_epsilon(D), [0, p]) * math.sqrt(8)
+        assert hm.values[p] <= exact + 1e-9 and full[p] <= exact + 1e-9
+    assert hm.values[hm.argmin()] == pytest.approx(np.nanmin(full), abs=1e-9)
+
+
+def test_cnbs_scale_landmarks_have_non_increasing_scores():
+    D = _points(9, 5)
+    shape = from_distance_matrix(D)
+    res = select_landmarks(shape, 4, "cnbs-scale")
+    assert res.score == "scale" and len(res.landmarks) == 4
+    assert list(res.scores) == sorted(res.scores, reverse=True)
+    assert res.initial_score >= res.scores[0]
+    base = select_landmarks(shape, 4, "fps", scores=True, score="scale")
+    assert base.score == "scale" and list(base.scores) == sorted(base.scores, reverse=True)
