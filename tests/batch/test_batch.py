@@ -226,3 +226,10 @@ def test_resume_skips_done_shapes_and_rescores_changed_ones(shape_dir, tmp_path)
     other = run_batch([work], out, {"points": 18}, resume=True)  # other parameters: other rows
     assert other.scored == 2
     assert len(read_table(out)) == 5
+
+
+def test_the_readme_documents_every_column():
+    readme = (Path(__file__).parents[2] / "README.md").read_text()
+    table = readme[readme.index("## Scoring collections"):]
+    table = table[:table.index("\n\n", table.index("| column |"))]
+    assert all(f"`{name}`" in table for name in schema.NAMES), [n for n in schema.NAMES if f"`{n}`" not in table]
