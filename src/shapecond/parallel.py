@@ -46,6 +46,8 @@ from shapecond.errors import InputError
 CONNECT_TIMEOUT = 10.0
 #: Seconds a Dask cluster may have no worker at all before the run is abandoned.
 NO_WORKER_TIMEOUT = 60.0
+#: Seconds between two looks at a Dask cluster's workers while no task completes.
+POLL_SECONDS = 5.0
 _THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
                      "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS", "NUMBA_NUM_THREADS")
 
@@ -132,10 +134,7 @@ class Runner:
             yield from _iter_dask(self.client, tasks)
         elif self.n_jobs == 1:
             for i, (f, a, k) in enumerate(tasks):
-                try:
-                    yield i, f(*a, **k), None
-                except Exception as exc:  # noqa: BLE001 - reported per task
-                    yield i, None, exc
+                yield (i, *_outcome(f, *a, **k))
         else:
             yield from _iter_loky(tasks, self.n_jobs)
 
@@ -190,6 +189,14 @@ def run_tasks(tasks, n_jobs=1, scheduler=None, progress=False, desc="tasks"):
     return results
 
 
+def _outcome(f, *args, **kwargs):
+    """``(result, None)`` or ``(None, exception)`` of one call."""
+    try:
+        return f(*args, **kwargs), None
+    except Exception as exc:  # noqa: BLE001 - reported per task
+        return None, exc
+
+
 def _thread_env(n_jobs: int) -> dict:
     share = str(max(1, (os.cpu_count() or 1) // n_jobs))
     return {name: share for name in _THREAD_VARIABLES}
@@ -213,29 +220,19 @@ def _iter_loky(tasks, n_jobs):
         while not suspects and queue and len(running) < n_jobs:
             submit(queue.popleft(), False)
         done, _ = wait(list(running), return_when=FIRST_COMPLETED)
-        broken = False
+        if any(isinstance(f.exception(), BrokenProcessPool) for f in done):
+            # the pool is broken: every task in flight fails with it; those are the suspects
+            done = list(running)
         for fut in done:
             i, alone = running.pop(fut)
-            try:
-                yield i, fut.result(), None
-            except BrokenProcessPool as exc:
-                if alone:
-                    yield i, None, WorkerDied(f"the worker process died while running this task "
-                                              f"({str(exc).splitlines()[0][:120]})")
-                else:
+            result, error = _outcome(fut.result)
+            if isinstance(error, BrokenProcessPool):
+                if not alone:
                     suspects.append(i)
-                    broken = True
-            except Exception as exc:  # noqa: BLE001 - reported per task
-                yield i, None, exc
-        if broken:  # every other task in flight fails with the pool: finish them, then retry alone
-            for fut in list(running):
-                i, alone = running.pop(fut)
-                try:
-                    yield i, fut.result(), None
-                except BrokenProcessPool:
-                    suspects.append(i)
-                except Exception as exc:  # noqa: BLE001
-                    yield i, None, exc
+                    continue
+                error = WorkerDied("the worker process died while running this task "
+                                   f"({str(error).splitlines()[0][:120]})")
+            yield i, result, error
 
 
 def _iter_dask(client, tasks):
@@ -249,7 +246,7 @@ def _iter_dask(client, tasks):
     try:
         while remaining:
             try:
-                done, remaining = dask_wait(list(remaining), timeout=5, return_when="FIRST_COMPLETED")
+                done, remaining = dask_wait(list(remaining), timeout=POLL_SECONDS, return_when="FIRST_COMPLETED")
             except TimeoutError:
                 if client.scheduler_info().get("workers"):
                     idle_since = None

@@ -3,14 +3,8 @@
 import numpy as np
 import pytest
 
+from shapecond.shapes.io import write_mesh
 from shapecond.shapes.synthetic import bumpy_blob, sphere
-
-
-def write_off(path, V, F):
-    lines = [f"OFF\n{len(V)} {len(F)} 0"] + [" ".join(f"{x:.9g}" for x in v) for v in V] \
-        + [f"3 {a} {b} {c}" for a, b, c in F]
-    path.write_text("\n".join(lines) + "\n")
-    return path
 
 
 @pytest.fixture(scope="session")
@@ -20,9 +14,9 @@ def shape_dir(tmp_path_factory):
     (root / "sub").mkdir()
     for k in range(3):
         g = bumpy_blob(subdivisions=2, seed=k + 1)
-        write_off(root / f"blob{k}.off", g.vertices, g.faces)
+        write_mesh(root / f"blob{k}.off", g.vertices, g.faces)
     g = sphere(subdivisions=3)
-    write_off(root / "sub" / "ball.off", g.vertices, g.faces)
+    write_mesh(root / "sub" / "ball.off", g.vertices, g.faces)
     return root
 
 
@@ -31,16 +25,16 @@ def broken_dir(tmp_path_factory):
     """One good mesh and every kind of bad input a collection can hold."""
     root = tmp_path_factory.mktemp("broken")
     g = bumpy_blob(subdivisions=2, seed=7)
-    write_off(root / "good.off", g.vertices, g.faces)
+    write_mesh(root / "good.off", g.vertices, g.faces)
     (root / "empty.off").write_text("")
     (root / "garbage.off").write_text("this is not a mesh\n")
     (root / "binary.ply").write_bytes(bytes(range(256)) * 4)
     np.save(root / "wrong_shape.npy", np.zeros((4, 5)))
     V = g.vertices.copy()
     V[3] = np.nan
-    write_off(root / "nan.off", V, g.faces)
+    write_mesh(root / "nan.off", V, g.faces)
     two = np.vstack([g.vertices, g.vertices + [5.0, 0, 0]])
-    write_off(root / "two_parts.off", two, np.vstack([g.faces, g.faces + len(g.vertices)]))
+    write_mesh(root / "two_parts.off", two, np.vstack([g.faces, g.faces + len(g.vertices)]))
     (root / "dangling.off").symlink_to(root / "no-such-target.off")
     return root
 

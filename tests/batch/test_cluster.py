@@ -18,7 +18,7 @@ from shapecond.errors import InputError
 
 from tests.conftest import run_cli
 from tests.matching.test_evaluation import dataset  # noqa: F401 - the class-folder fixture
-from tests.batch.conftest import write_off
+from shapecond.shapes.io import write_mesh
 from tests.batch.test_batch import read_table, stable
 
 
@@ -63,6 +63,16 @@ def test_a_crashing_task_fails_alone_on_a_dask_cluster(dask_client):
         assert run.workers == 2
         _check_outcomes(list(run.iter_tasks(TASKS)), lambda e: type(e).__name__ == "KilledWorker")
     dask_client.wait_for_workers(2, timeout=30)  # the nanny restarts the killed workers
+
+
+def test_a_cluster_without_workers_ends_the_run_instead_of_hanging(monkeypatch):
+    from dask.distributed import Client, LocalCluster
+
+    monkeypatch.setattr(parallel, "NO_WORKER_TIMEOUT", 0.5)
+    monkeypatch.setattr(parallel, "POLL_SECONDS", 0.2)
+    with LocalCluster(n_workers=0, host="127.0.0.1", dashboard_address=":0") as cluster, Client(cluster) as client:
+        with pytest.raises(InputError, match="no worker for"):
+            parallel.run_tasks([(math.sqrt, (4.0,), {})], scheduler=client)
 
 
 def test_an_unreachable_scheduler_is_one_error_line(shape_dir, tmp_path, capsys, monkeypatch):
@@ -128,7 +138,7 @@ def test_a_batch_killed_mid_run_resumes_to_the_same_table(tmp_path):
     folder.mkdir()
     for k in range(6):  # ~0.4 s each from an empty cache
         g = bumpy_blob(subdivisions=4, seed=20 + k)
-        write_off(folder / f"b{k}.off", g.vertices, g.faces)
+        write_mesh(folder / f"b{k}.off", g.vertices, g.faces)
     out, journal = tmp_path / "t.parquet", tmp_path / ".t.parquet.journal"
     env = dict(os.environ, SHAPECOND_CACHE=str(tmp_path / "cache"))
     proc = subprocess.Popen([sys.executable, "-m", "shapecond", "batch", str(folder), "--points", "60",
