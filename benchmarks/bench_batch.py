@@ -1,0 +1,198 @@
+"""Batch scoring throughput: 1 and 2 local processes and a 2-worker LocalCluster on the same TOSCA meshes.
+
+Usage: python benchmarks/bench_batch.py TOSCA_DIR [--points 200] [--count 20] [--no-write]
+
+TOSCA_DIR is ``shared/data/tosca_hires``.  ``--count`` meshes are taken evenly
+spread over the sorted list of meshes that can be scored as they are (gorilla,
+with 38 components, is left out).  Each configuration runs ``shapecond batch`` in
+a fresh process with an empty cache folder (so each computes its geodesics),
+then the single-process run is repeated on its warm cache to split the time
+between geodesics and the search.  Also measured in this process: the cost per
+task of each runner (a task that returns a row-sized dict), hashing the inputs,
+and appending 10,000 rows to a Parquet table.  Writes the ``batch`` section of
+benchmarks/RESULTS.md.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _results import command_line, machine, write_section  # noqa: E402
+
+CONFIGS = [("1 process", ["--jobs", "1"], 1), ("2 processes (joblib)", ["--jobs", "2"], 2),
+           ("LocalCluster, 2 workers", ["--scheduler", "local:2"], 2)]
+
+
+def pick(root: Path, count: int) -> list[Path]:
+    files = sorted(p for p in root.rglob("*.off") if p.parent.name != "gorilla")
+    if count >= len(files):
+        return files
+    return [files[round(i * (len(files) - 1) / (count - 1))] for i in range(count)]
+
+
+def load_rows(path: Path) -> list[dict]:
+    import pyarrow.parquet as pq
+
+    return pq.read_table(path).to_pylist()
+
+
+def run_batch_process(files, points, extra, cache, out) -> dict:
+    env = dict(os.environ, SHAPECOND_CACHE=str(cache))
+    cmd = [sys.executable, "-m", "shapecond", "batch", *map(str, files), "--points", str(points),
+           "--out", str(out), "--overwrite", "--json", *extra]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode not in (0, 3):
+        raise RuntimeError(proc.stderr.strip().splitlines()[-1])
+    summary = json.loads(proc.stdout)
+    rows = load_rows(out)
+    by_worker = {}
+    for r in rows:
+        by_worker.setdefault(r["worker"], []).append(r)
+    return dict(wall=wall, summary=summary, rows=rows,
+                busy=sum(r["seconds"] for r in rows),
+                median=statistics.median(r["seconds"] for r in rows),
+                peak={w: max(r["peak_memory_mib"] for r in rs) for w, rs in by_worker.items()},
+                per_worker={w: len(rs) for w, rs in by_worker.items()},
+                failed=sum(r["error"] is not None for r in rows))
+
+
+def _row_task(i):
+    from shapecond.batch import schema
+
+    row = schema.empty_row()
+    row.update(file=f"/data/shape{i}.off", content_hash="0" * 64, params="x" * 180, sigma_lower=1.0)
+    return row
+
+
+def task_overhead(n_tasks=400) -> dict:
+    """Seconds per task of each runner for a task that only returns a row."""
+    from shapecond.parallel import runner
+
+    out = {}
+    for label, jobs, sched in (("this process", 1, None), ("2 processes (joblib)", 2, None),
+                               ("LocalCluster, 2 workers", 1, "local:2")):
+        with runner(jobs, sched) as run:
+            list(run.iter_tasks([(_row_task, (i,), {}) for i in range(20)]))  # warm up the workers
+            t0 = time.perf_counter()
+            results = list(run.iter_tasks([(_row_task, (i,), {}) for i in range(n_tasks)]))
+            out[label] = (time.perf_counter() - t0) / n_tasks
+        assert all(e is None for _, _, e in results)
+    return out
+
+
+def client_costs(files, n_rows=10_000) -> dict:
+    from shapecond.batch.inputs import content_hashes
+    from shapecond.batch.table import Table
+
+    size = sum(p.stat().st_size for p in files) / 2 ** 20
+    t0 = time.perf_counter()
+    content_hashes([str(p) for p in files])
+    hash_s = time.perf_counter() - t0
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "t.parquet"
+        t0 = time.perf_counter()
+        with Table(path) as table:
+            for i in range(n_rows):
+                row = _row_task(i)
+                row.update(landmarks=[1, 2, 3], landmark_scores=[0.5, 0.4, 0.3], seconds=1.0)
+                table.append(row)
+            t1 = time.perf_counter()
+            table._snapshot()  # what every rewrite costs once the table is this large
+            snapshot = time.perf_counter() - t1
+        append_s = time.perf_counter() - t0
+        mib = path.stat().st_size / 2 ** 20
+    return dict(hash_mib=size, hash_s=hash_s, append_s=append_s, n_rows=n_rows, snapshot_s=snapshot,
+                parquet_mib=mib)
+
+
+def main(argv):
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("tosca_dir", type=Path)
+    parser.add_argument("--points", type=int, default=200)
+    parser.add_argument("--count", type=int, default=20)
+    parser.add_argument("--no-write", action="store_true")
+    args = parser.parse_args(argv)
+    points = args.points
+    files = pick(args.tosca_dir, args.count)
+    load = os.getloadavg()
+    results = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        for label, extra, workers in CONFIGS:
+            cache = tmp / f"cache-{workers}-{len(results)}"
+            results[label] = run_batch_process(files, points, extra, cache, tmp / f"{len(results)}.parquet")
+            results[label]["workers"] = workers
+            results[label]["cache"] = cache
+            r = results[label]
+            print(f"{label}: {r['wall']:.1f} s, {60 * len(files) / r['wall']:.2f} shapes/min, "
+                  f"peak {max(r['peak'].values()):.0f} MiB", flush=True)
+        warm = run_batch_process(files, points, ["--jobs", "1"], results["1 process"]["cache"], tmp / "warm.parquet")
+        cache_mib = sum(p.stat().st_size for p in results["1 process"]["cache"].iterdir()) / 2 ** 20
+    overhead = task_overhead()
+    client = client_costs(files)
+    load_after = os.getloadavg()
+    body = report(files, points, results, warm, overhead, client, load, load_after, cache_mib)
+    print(body)
+    if not args.no_write:
+        write_section("batch", body)
+
+
+def report(files, points, results, warm, overhead, client, load, load_after, cache_mib) -> str:
+    n = len(files)
+    base = results["1 process"]
+    mib = sum(p.stat().st_size for p in files) / 2 ** 20
+    lines = [f"## Batch scoring: throughput on one machine and a LocalCluster (bench_batch.py)", "",
+             f"Machine: {machine()}. Command: `{command_line()}`. Load average before "
+             f"{load[0]:.2f} / {load[1]:.2f}, after {load_after[0]:.2f} / {load_after[1]:.2f} (1 / 5 min).",
+             "",
+             f"{n} TOSCA meshes ({', '.join(p.stem for p in files)}; {mib:.0f} MiB of OFF), N = {points}, "
+             f"dense targets M = {8 * points}, default effort; each configuration is a fresh `shapecond batch` "
+             "process with an empty cache folder, so it computes every geodesic matrix. Busy = sum of the rows' "
+             "`seconds`; utilisation = busy / (wall x workers); peak = the largest `peak_memory_mib` of any row "
+             "of that worker process.", "",
+             "| configuration | wall (s) | shapes/min | speed-up | busy (s) | utilisation | median s/shape | "
+             "peak MiB per worker | shapes per worker |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for label, r in results.items():
+        lines.append(f"| {label} | {r['wall']:.1f} | {60 * n / r['wall']:.2f} | {base['wall'] / r['wall']:.2f} | "
+                     f"{r['busy']:.1f} | {r['busy'] / (r['wall'] * r['workers']):.0%} | {r['median']:.1f} | "
+                     f"{', '.join(f'{v:.0f}' for v in sorted(r['peak'].values()))} | "
+                     f"{', '.join(str(v) for v in sorted(r['per_worker'].values()))} |")
+    lines.append(f"| 1 process, warm cache | {warm['wall']:.1f} | {60 * n / warm['wall']:.2f} | "
+                 f"{base['wall'] / warm['wall']:.2f} | {warm['busy']:.1f} | {warm['busy'] / warm['wall']:.0%} | "
+                 f"{warm['median']:.1f} | {max(warm['peak'].values()):.0f} | {n} |")
+    failed = {label: r["failed"] for label, r in results.items() if r["failed"]}
+    lines += ["", f"Failed rows: {failed or 'none'}. Rows of the three configurations agree: "
+              f"{agree(results)}.", "",
+              "Per-task cost of each runner (a task that returns a row-sized dict; 400 tasks after 20 warm-up "
+              "tasks): " + ", ".join(f"{k} {1e3 * v:.2f} ms" for k, v in overhead.items()) + ".", "",
+              f"Client side: hashing the {n} inputs ({client['hash_mib']:.0f} MiB) took {client['hash_s']:.2f} s "
+              f"({client['hash_mib'] / client['hash_s']:.0f} MiB/s, warm page cache); appending "
+              f"{client['n_rows']:,} rows to a Parquet table took {client['append_s']:.1f} s "
+              f"({1e3 * client['append_s'] / client['n_rows']:.2f} ms per row, journal line plus the periodic "
+              f"atomic rewrite; the last rewrite of all {client['n_rows']:,} rows took "
+              f"{client['snapshot_s']:.2f} s; file {client['parquet_mib']:.1f} MiB). Cache written by the "
+              f"single-process run: {cache_mib:.0f} MiB ({cache_mib / n:.1f} MiB per shape)."]
+    return "\n".join(lines)
+
+
+def agree(results) -> str:
+    keys = ("sigma_lower", "sigma_hat", "resolution", "witness_moved", "error")
+    tables = [{r["file"]: tuple(r[k] for k in keys) for r in res["rows"]} for res in results.values()]
+    return "yes" if all(t == tables[0] for t in tables[1:]) else "NO (see the parquet files)"
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
