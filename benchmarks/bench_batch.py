@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -44,13 +45,18 @@ def load_rows(path: Path) -> list[dict]:
     return pq.read_table(path).to_pylist()
 
 
+def _children_cpu() -> float:
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
 def run_batch_process(files, points, extra, cache, out) -> dict:
     env = dict(os.environ, SHAPECOND_CACHE=str(cache))
     cmd = [sys.executable, "-m", "shapecond", "batch", *map(str, files), "--points", str(points),
            "--out", str(out), "--overwrite", "--json", *extra]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _children_cpu()
     proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, _children_cpu() - c0
     if proc.returncode not in (0, 3):
         raise RuntimeError(proc.stderr.strip().splitlines()[-1])
     summary = json.loads(proc.stdout)
@@ -58,9 +64,10 @@ def run_batch_process(files, points, extra, cache, out) -> dict:
     by_worker = {}
     for r in rows:
         by_worker.setdefault(r["worker"], []).append(r)
-    return dict(wall=wall, summary=summary, rows=rows,
-                busy=sum(r["seconds"] for r in rows),
+    return dict(wall=wall, cpu=cpu, load=os.getloadavg()[0], summary=summary, rows=rows,
+                busy=sum(r["seconds"] for r in rows), busy_cpu=sum(r["cpu_seconds"] for r in rows),
                 median=statistics.median(r["seconds"] for r in rows),
+                median_cpu=statistics.median(r["cpu_seconds"] for r in rows),
                 peak={w: max(r["peak_memory_mib"] for r in rs) for w, rs in by_worker.items()},
                 per_worker={w: len(rs) for w, rs in by_worker.items()},
                 failed=sum(r["error"] is not None for r in rows))
@@ -159,20 +166,19 @@ def report(files, points, results, warm, overhead, client, load, load_after, cac
              "",
              f"{n} TOSCA meshes ({', '.join(p.stem for p in files)}; {mib:.0f} MiB of OFF), N = {points}, "
              f"dense targets M = {8 * points}, default effort; each configuration is a fresh `shapecond batch` "
-             "process with an empty cache folder, so it computes every geodesic matrix. Busy = sum of the rows' "
-             "`seconds`; utilisation = busy / (wall x workers); peak = the largest `peak_memory_mib` of any row "
-             "of that worker process.", "",
-             "| configuration | wall (s) | shapes/min | speed-up | busy (s) | utilisation | median s/shape | "
-             "peak MiB per worker | shapes per worker |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for label, r in results.items():
+             "process with an empty cache folder, so it computes every geodesic matrix. CPU = user + system time "
+             "of the batch process and all its workers; rows = sums of the rows' `seconds` (wall) and "
+             "`cpu_seconds`; rows' wall / rows' CPU above 1 means the workers waited for a core (the 2 cores are "
+             "shared with other jobs, see the load); peak = the largest `peak_memory_mib` of any row of that "
+             "worker process.", "",
+             "| configuration | wall (s) | shapes/min | speed-up | CPU (s) | rows' wall (s) | rows' CPU (s) | "
+             "rows' wall / CPU | median CPU s/shape | peak MiB per worker | shapes per worker | load at end |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for label, r in [*results.items(), ("1 process, warm cache", warm)]:
         lines.append(f"| {label} | {r['wall']:.1f} | {60 * n / r['wall']:.2f} | {base['wall'] / r['wall']:.2f} | "
-                     f"{r['busy']:.1f} | {r['busy'] / (r['wall'] * r['workers']):.0%} | {r['median']:.1f} | "
-                     f"{', '.join(f'{v:.0f}' for v in sorted(r['peak'].values()))} | "
-                     f"{', '.join(str(v) for v in sorted(r['per_worker'].values()))} |")
-    lines.append(f"| 1 process, warm cache | {warm['wall']:.1f} | {60 * n / warm['wall']:.2f} | "
-                 f"{base['wall'] / warm['wall']:.2f} | {warm['busy']:.1f} | {warm['busy'] / warm['wall']:.0%} | "
-                 f"{warm['median']:.1f} | {max(warm['peak'].values()):.0f} | {n} |")
+                     f"{r['cpu']:.0f} | {r['busy']:.0f} | {r['busy_cpu']:.0f} | {r['busy'] / r['busy_cpu']:.2f} | "
+                     f"{r['median_cpu']:.1f} | {', '.join(f'{v:.0f}' for v in sorted(r['peak'].values()))} | "
+                     f"{', '.join(str(v) for v in sorted(r['per_worker'].values()))} | {r['load']:.2f} |")
     failed = {label: r["failed"] for label, r in results.items() if r["failed"]}
     lines += ["", f"Failed rows: {failed or 'none'}. Rows of the three configurations agree: "
               f"{agree(results)}.", "",

@@ -18,7 +18,7 @@ from shapecond.errors import InputError
 from tests.conftest import run_cli
 
 #: columns that depend on where and when a row was computed, not on the shape
-VOLATILE = ("seconds", "peak_memory_mib", "worker")
+VOLATILE = ("seconds", "cpu_seconds", "peak_memory_mib", "worker")
 
 
 def stable(rows):
@@ -103,7 +103,7 @@ def test_a_row_holds_what_info_score_local_and_landmarks_print(shape_dir, capsys
     lm = json.loads(out)
     assert row["landmarks"] == lm["landmarks"]
     assert row["landmark_scores"] == pytest.approx(lm["scores"], rel=1e-12)
-    assert row["peak_memory_mib"] > 10 and row["seconds"] > 0
+    assert row["peak_memory_mib"] > 10 and row["seconds"] > 0 and row["cpu_seconds"] > 0
 
 
 def test_bad_inputs_become_error_rows_and_exit_3(broken_dir, tmp_path, capsys):

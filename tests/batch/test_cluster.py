@@ -19,7 +19,7 @@ from shapecond.errors import InputError
 from tests.conftest import run_cli
 from tests.matching.test_evaluation import dataset  # noqa: F401 - the class-folder fixture
 from shapecond.shapes.io import write_mesh
-from tests.batch.test_batch import read_table, stable
+from tests.batch.test_batch import VOLATILE, read_table, stable
 
 
 def same_rows(a, b):
@@ -28,7 +28,7 @@ def same_rows(a, b):
     assert len(a) == len(b)
     for x, y in zip(a, b):
         for k in schema.NAMES:
-            if k in ("seconds", "peak_memory_mib", "worker"):
+            if k in VOLATILE:
                 continue
             u, v = x[k], y[k]
             if k == "error" and u is not None:

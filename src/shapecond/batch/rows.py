@@ -102,7 +102,7 @@ def score_shape(spec: str, expected_hash: str | None, options: dict, params: str
     """The row of one shape (see ``schema.COLUMNS``); failures go to its ``error`` column."""
     row = schema.empty_row()
     row.update(file=spec, content_hash=expected_hash, params=params, version=__version__, worker=worker_name())
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     with PeakMemory() as mem:
         try:
             _check_file(spec, expected_hash)
@@ -113,7 +113,7 @@ def score_shape(spec: str, expected_hash: str | None, options: dict, params: str
             row["error"] = "out of memory; try fewer --points"
         except Exception as exc:  # noqa: BLE001 - an internal failure is one shape's error too
             row["error"] = f"internal failure: {exc.__class__.__name__}: {_one_line(exc)}"
-    row["seconds"] = time.perf_counter() - t0
+    row["seconds"], row["cpu_seconds"] = time.perf_counter() - t0, time.process_time() - c0
     row["peak_memory_mib"] = mem.mib
     return row
 

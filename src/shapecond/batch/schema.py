@@ -60,6 +60,8 @@ COLUMNS = (
                                                 "cnbs-local)"),
     # accounting
     Column("seconds", "float64", "wall time of the shape on its worker, reading included"),
+    Column("cpu_seconds", "float64", "CPU time of the worker process while it scored the shape (all its "
+                                     "threads)"),
     Column("peak_memory_mib", "float64", "peak resident memory of the worker process while it scored "
                                          "the shape (MiB)"),
     Column("worker", "string", "host:pid of the process that computed the row"),
