@@ -229,8 +229,9 @@ def projection(m) -> str:
     top = max((r for res in m["results"].values() for r in res["rows"]), key=lambda r: r["peak_memory_mib"])
     peak = top["peak_memory_mib"]
     why = (", so the shortfall is the shared cores, not the runner." if lc["busy_cpu"] < 1.15 * base["busy_cpu"]
-           else "; part of the extra CPU is each fresh worker importing its libraries and loading its "
-                "compiled kernels on its first shape.")
+           else ": two busy processes on this virtual machine's two cores, which other jobs share too, each "
+                "get less done per CPU second than one alone, and each fresh worker pays its imports on its "
+                "first shape; separate cluster nodes do not share cores that way.")
     rewrite = client["snapshot_s"]
     return (
         f"**A {PROJECT_NODES}-node cluster and {PROJECT_SHAPES:,} meshes** (projected from the figures above, "
@@ -246,7 +247,8 @@ def projection(m) -> str:
         f"their CPU time in wall time (waiting for cores shared with other jobs; one worker alone: "
         f"{base['busy'] / base['busy_cpu']:.2f}x) while their CPU time per shape was "
         f"{lc['busy_cpu'] / base['busy_cpu']:.2f}x the single worker's{why} "
-        f"*The scheduler*: {1e3 * per_task:.1f} ms per task here, all included (submission, one row back), "
+        f"*The scheduler*: {1e3 * per_task:.1f} ms per task here, all included (submission, one row back) "
+        f"and with the scheduler sharing the two cores with its workers, "
         f"i.e. about {1 / per_task:.0f} tasks per second, while {workers} workers finishing a shape every "
         f"{cold:.0f} s need {rate:.0f} per second ({rate * per_task:.0%} of that); the {PROJECT_SHAPES:,} "
         f"tasks cost the scheduler {PROJECT_SHAPES * per_task:.0f} s in all. The client hashes every input "

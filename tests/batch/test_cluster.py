@@ -15,11 +15,10 @@ from shapecond import parallel
 from shapecond.batch import schema
 from shapecond.batch.run import run_batch
 from shapecond.errors import InputError
-
-from tests.conftest import run_cli
-from tests.matching.test_evaluation import dataset  # noqa: F401 - the class-folder fixture
 from shapecond.shapes.io import write_mesh
 from tests.batch.test_batch import VOLATILE, read_table, stable
+from tests.conftest import run_cli
+from tests.matching.test_evaluation import dataset  # noqa: F401 - the class-folder fixture
 
 
 def same_rows(a, b):
