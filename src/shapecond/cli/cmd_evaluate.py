@@ -6,8 +6,9 @@ and order (ground truth = identity on vertex ids).  See
 
 Running on a Dask cluster: start a scheduler and workers that can read
 DATASET_DIR (and, ideally, share ``$SHAPECOND_CACHE``), then pass
-``--scheduler tcp://HOST:8786``; joblib's dask backend ships the per-shape tasks
-to the workers (needs ``pip install 'shapecond[dask]'``).
+``--scheduler tcp://HOST:8786``, or ``--scheduler local:W`` for a LocalCluster of
+W workers on this machine; the per-shape tasks go to the workers
+(``shapecond.parallel``; needs ``pip install 'shapecond[dask]'``).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from ..errors import InputError
 from ..matching.evaluation import PROTOCOLS, evaluate_dataset
 from ..matching.pipeline import MATCHERS
 from ..matching.report import by_protocol, correlations, protocols, write_report
+from ..parallel import runner
 from .common import emit_json, info, json_option, progress_enabled
 
 DEFAULT_METHODS = "fps,pls,hks,cnbs,cnbs-scale"
@@ -61,7 +63,8 @@ def _names(text, allowed=None, what="name"):
               help="corresponding: targets sampled at the null shape's sample vertices (the κ setting); "
                    "independent: each target sampled by its own FPS; both.")
 @click.option("--scheduler", default=None,
-              help="Dask scheduler address (tcp://host:8786): run the tasks on that cluster.")
+              help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
+                   "LocalCluster with W workers.")
 @json_option
 def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, points, max_targets,
             seed, geodesic_backend, no_cache, protocol, scheduler, as_json):
@@ -69,12 +72,13 @@ def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, point
     if jobs < 1:
         raise InputError("--jobs must be at least 1")
     t0 = time.perf_counter()
-    ev = evaluate_dataset(Path(dataset_dir), classes=_names(classes, what="class") or None,
-                          methods=_names(methods, what="method"),
-                          matchers=_names(matchers, MATCHERS, "matcher"), n_jobs=jobs,
-                          scheduler=scheduler, quick=quick, n_points=points, seed=seed,
-                          backend=geodesic_backend, cache=not no_cache,
-                          progress=progress_enabled(), max_targets=max_targets, protocol=protocol)
+    with runner(jobs, scheduler) as run:  # one cluster for every stage of the evaluation
+        ev = evaluate_dataset(Path(dataset_dir), classes=_names(classes, what="class") or None,
+                              methods=_names(methods, what="method"),
+                              matchers=_names(matchers, MATCHERS, "matcher"), n_jobs=jobs,
+                              scheduler=run.client, quick=quick, n_points=points, seed=seed,
+                              backend=geodesic_backend, cache=not no_cache,
+                              progress=progress_enabled(), max_targets=max_targets, protocol=protocol)
     report = write_report(ev, out_dir)
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),

@@ -2,30 +2,10 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 
-from ..shapes.geometry import Geometry
-from ..shapes.io import MESH_SUFFIXES, load_input, read_mesh_arrays
-from ..shapes.validate import inspect_mesh
+from ..shapes.io import describe_input
 from .common import emit_json, json_option
-
-
-def _report(input_spec: str) -> dict:
-    path = Path(input_spec)
-    if input_spec.startswith("demo:") or path.suffix.lower() not in MESH_SUFFIXES:
-        loaded = load_input(input_spec)
-        if not isinstance(loaded, Geometry):
-            n = loaded.shape[0]
-            return {"input": input_spec, "kind": "distance matrix", "n_vertices": n, "n_faces": None,
-                    "bounding_box": None, "components": None, "boundary_edges": None,
-                    "isolated_vertices": None, "diameter": float(loaded.max()), "problems": []}
-        report = inspect_mesh(loaded.vertices, loaded.faces)
-    else:  # read raw so that problems are reported instead of raised
-        vertices, faces = read_mesh_arrays(path)
-        report = inspect_mesh(vertices, faces)
-    return {"input": input_spec, **report}
 
 
 @click.command("info")
@@ -33,7 +13,7 @@ def _report(input_spec: str) -> dict:
 @json_option
 def command(input_spec, as_json):
     """Counts, bounding box, components, boundary edges, isolated vertices, problems."""
-    report = _report(input_spec)
+    report = describe_input(input_spec)
     if as_json:
         emit_json(report)
         return

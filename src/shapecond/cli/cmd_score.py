@@ -12,35 +12,9 @@ from __future__ import annotations
 import click
 import numpy as np
 
-from ..symmetry.resolution import resolution_for_shape
-from ..symmetry.scale import scale_score
-from ..symmetry.score import symmetry_score
+from ..symmetry.report import score_report
 from .common import build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
     pop_shape_options, shape_options
-
-
-def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                 effort="default", epsilon=None) -> tuple[dict, object]:
-    """JSON-ready report of one metric shape: σ, κ, witness, resolution and ``scale`` (δ(ε))."""
-    lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
-    sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
-                        seed=seed, effort=effort)
-    out = sc.to_dict()
-    out["landmarks"] = [int(v) for v in landmark_ids]
-    out["samples"] = [int(v) for v in shape.sample_ids]
-    out["target"] = shape.target
-    res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
-    out["resolution"] = None if res is None else res.to_dict()
-    if shape.geometry is None:
-        out["witness_vertices"] = None
-    else:
-        out["witness_vertices"] = [int(v) for v in shape.target_ids[sc.witness]]
-    scale = scale_score(shape.D, shape.n_points, lm, epsilon, seed=seed, effort=effort,
-                        starts=[sc.witness, *sc.maps])
-    out["scale"] = scale.to_dict()
-    out["scale"]["witness_vertices"] = (None if shape.geometry is None
-                                        else [int(v) for v in shape.target_ids[scale.witness]])
-    return out, sc
 
 
 @click.command("score")

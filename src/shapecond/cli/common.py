@@ -110,8 +110,11 @@ def load_geometry_or_matrix(input_spec: str, largest_component: bool = False, sy
 
 def build_shape(input_spec: str, landmarks=(), points=None, metric="geodesic", geodesic_backend="heat", seed=0,
                 largest_component=False, no_cache=False, target=None, target_factor=8, symmetry_map=None,
-                loaded=None) -> MetricShape:
-    """Turn INPUT and the shape options into a ``MetricShape``; landmarks (input ids) come first."""
+                loaded=None, progress=None) -> MetricShape:
+    """Turn INPUT and the shape options into a ``MetricShape``; landmarks (input ids) come first.
+
+    ``progress``: show the sampling's progress bar (default: when stderr is a terminal).
+    """
     if loaded is None:
         loaded = load_geometry_or_matrix(input_spec, largest_component, symmetry_map)
     ids = parse_ids(landmarks)
@@ -133,7 +136,7 @@ def build_shape(input_spec: str, landmarks=(), points=None, metric="geodesic", g
     internal = loaded.to_internal(ids)
     return metric_shape(loaded, n_points=n_points, metric=metric, backend=geodesic_backend, seed=seed,
                         landmarks=internal, target=target, target_factor=target_factor, cache=not no_cache,
-                        progress=progress_enabled())
+                        progress=progress_enabled() if progress is None else progress)
 
 
 def jsonable(obj):

@@ -53,6 +53,7 @@ from shapecond.matching.pipeline import match_samples, match_surfaces
 from shapecond.matching.sampled import (CachedSolver, carry_samples, insert_landmarks,
                                         sample_surface, surface_at)
 from shapecond.matching.spectral import fine_kernel
+from shapecond.parallel import run_tasks
 
 #: Landmark counts of the paper's Figure 7 per TOSCA class.
 PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog": 12,
@@ -266,41 +267,6 @@ def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_
                     float(normalise(raw_s, 2 * half).mean()), time.perf_counter() - t0,
                     err.astype(np.float32), protocol, **extra))
     return out
-
-
-def run_tasks(tasks, n_jobs=1, scheduler=None, progress=False):
-    """Run ``(function, args, kwargs)`` tasks with joblib; results in completion order.
-
-    ``scheduler``: a Dask scheduler address (``tcp://host:8786``) or a
-    ``dask.distributed.Client``; joblib's ``"dask"`` backend then ships the tasks.
-    """
-    import joblib
-    from tqdm import tqdm
-
-    tasks = list(tasks)
-    bar = tqdm(total=len(tasks), desc="matching", unit="shape", disable=not progress)
-    if scheduler is not None:
-        try:
-            from dask.distributed import Client
-        except ImportError:
-            raise InputError("--scheduler needs dask: pip install 'shapecond[dask]'") from None
-        client = scheduler if isinstance(scheduler, Client) else Client(scheduler)
-        ctx = joblib.parallel_config(backend="dask")
-    else:
-        client, ctx = None, joblib.parallel_config(backend="loky" if n_jobs != 1 else "sequential")
-    results = []
-    try:
-        with ctx:
-            par = joblib.Parallel(n_jobs=-1 if scheduler is not None else n_jobs,
-                                  return_as="generator_unordered")
-            for res in par(joblib.delayed(f)(*a, **k) for f, a, k in tasks):
-                results.append(res)
-                bar.update(1)
-    finally:
-        bar.close()
-        if client is not None and client is not scheduler:
-            client.close()
-    return results
 
 
 # --- orchestration -----------------------------------------------------------------

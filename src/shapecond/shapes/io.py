@@ -21,7 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 from .geometry import Geometry
-from .validate import check_distance_matrix, clean_mesh
+from .validate import check_distance_matrix, clean_mesh, inspect_mesh
 
 MESH_SUFFIXES = {".off", ".obj", ".ply", ".stl"}
 CLOUD_SUFFIXES = {".xyz", ".txt"}
@@ -63,6 +63,30 @@ def load_input(spec: str, largest_component: bool = False):
             return check_distance_matrix(arr, path.name)
         raise InputError(f"{path.name}: expected an (n, 3) point cloud or an N x N distance matrix, got {arr.shape}")
     return load_geometry(path, largest_component=largest_component)
+
+
+def describe_input(spec: str) -> dict:
+    """What ``shapecond info`` reports: counts, bounding box, components, problems.
+
+    Mesh files are read raw (``read_mesh_arrays``) so that their problems are
+    listed instead of raised; other inputs go through ``load_input`` (and raise
+    ``InputError`` when unusable).  A distance matrix reports its size and
+    diameter only.
+    """
+    spec = str(spec)
+    path = Path(spec)
+    if spec.startswith("demo:") or path.suffix.lower() not in MESH_SUFFIXES:
+        loaded = load_input(spec)
+        if not isinstance(loaded, Geometry):
+            n = loaded.shape[0]
+            return {"input": spec, "kind": "distance matrix", "n_vertices": n, "n_faces": None,
+                    "bounding_box": None, "components": None, "boundary_edges": None,
+                    "isolated_vertices": None, "diameter": float(loaded.max()), "problems": []}
+        report = inspect_mesh(loaded.vertices, loaded.faces)
+    else:
+        vertices, faces = read_mesh_arrays(path)
+        report = inspect_mesh(vertices, faces)
+    return {"input": spec, **report}
 
 
 def _check_file(path: Path) -> None:

@@ -1,0 +1,87 @@
+"""Which shapes a batch scores: files, folders (recursively) and glob patterns, with content hashes."""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import os
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+from ..errors import InputError
+from ..shapes.io import MESH_SUFFIXES
+
+#: Suffixes collected from folders: what ``load_input`` reads, except ``.txt``
+#: (folders hold text files that are not point clouds; name those explicitly)
+#: and ``.tri`` (the ``.vert`` of a TOSCA pair stands for the pair).
+FOLDER_SUFFIXES = frozenset(MESH_SUFFIXES | {".vert", ".xyz", ".npy"})
+
+
+def _walk(folder: Path) -> list[str]:
+    found = []
+    for root, dirs, files in os.walk(folder):
+        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        found += [os.path.join(root, f) for f in sorted(files)
+                  if not f.startswith(".") and Path(f).suffix.lower() in FOLDER_SUFFIXES]
+    return found
+
+
+def expand_inputs(specs) -> list[str]:
+    """Absolute paths (or ``demo:`` specifications) of the shapes named by ``specs``, in order, once each.
+
+    A folder contributes every file below it whose suffix is in ``FOLDER_SUFFIXES``;
+    a glob pattern (``*``, ``?``, ``[``, ``**``) its matches (folders among them
+    are walked); any other name is taken as a file, even one that does not
+    exist (it becomes an error row).  InputError when nothing is found.
+    """
+    out, seen = [], set()
+    for spec in specs:
+        spec = str(spec)
+        if spec.startswith("demo:"):
+            names = [spec]
+        elif Path(spec).is_dir():
+            names = _walk(Path(spec))
+            if not names:
+                raise InputError(f"{spec}: no shape files in this folder "
+                                 f"({', '.join(sorted(FOLDER_SUFFIXES))})")
+        elif glob.has_magic(spec):
+            names = []
+            for match in sorted(glob.glob(spec, recursive=True)):
+                names += _walk(Path(match)) if Path(match).is_dir() else [match]
+            if not names:
+                raise InputError(f"{spec}: no file matches this pattern")
+        else:
+            names = [spec]
+        for name in names:
+            name = name if name.startswith("demo:") else os.path.abspath(name)
+            if name not in seen:
+                seen.add(name)
+                out.append(name)
+    if not out:
+        raise InputError("no input shapes given")
+    return out
+
+
+def content_hash(spec: str) -> str | None:
+    """SHA-256 of a shape's bytes (``.vert`` then ``.tri`` for a TOSCA pair; the text of a
+    ``demo:`` specification); None when the file cannot be read."""
+    h = hashlib.sha256()
+    if spec.startswith("demo:"):
+        h.update(spec.encode())
+        return h.hexdigest()
+    path = Path(spec)
+    parts = [path, path.with_suffix(".tri")] if path.suffix.lower() == ".vert" else [path]
+    try:
+        for part in parts:
+            with open(part, "rb") as fh:
+                for chunk in iter(lambda: fh.read(1 << 20), b""):
+                    h.update(chunk)
+    except OSError:
+        return None
+    return h.hexdigest()
+
+
+def content_hashes(specs, threads: int = 8) -> list[str | None]:
+    """``content_hash`` of every spec, read by a few threads (hashing releases the GIL)."""
+    with ThreadPoolExecutor(max_workers=threads) as pool:
+        return list(pool.map(content_hash, specs))

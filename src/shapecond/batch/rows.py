@@ -1,0 +1,198 @@
+"""One shape, one row: the per-shape task of batch scoring (runs on a worker).
+
+``score_shape`` fills the columns of ``schema.COLUMNS`` through the code paths
+of the single-shape commands, so that a row holds what ``shapecond info``,
+``score --json``, ``local --json`` and ``landmarks --json`` print for that shape
+with the same options.  It never raises for a bad shape: the row's ``error``
+column gets the one-line message, and the columns computed before the failure
+are kept.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import __version__
+from ..errors import InputError
+from ..parallel import PeakMemory, worker_name
+from . import schema
+from .inputs import content_hash
+
+#: The options of ``shapecond score`` a batch takes, with the command line's defaults.
+DEFAULT_OPTIONS = {"points": None, "metric": "geodesic", "geodesic_backend": "heat", "seed": 0,
+                   "largest_component": False, "no_cache": False, "target": None, "target_factor": 8,
+                   "symmetry_map": None, "effort": "default", "what": ["score"]}
+#: Options that shape the results (``no_cache`` does not).
+KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k != "no_cache")
+
+
+@dataclass(frozen=True)
+class What:
+    """What to compute beyond ``info``: the global score, the local score, K landmarks of a method."""
+
+    score: bool = True
+    local: bool = False
+    landmarks: tuple | None = None   # (K, METHOD)
+
+    def items(self) -> list[str]:
+        """The canonical ``--what`` list (the form stored in the ``params`` column)."""
+        out = (["score"] if self.score else []) + (["local"] if self.local else [])
+        return out + ([f"landmarks:{self.landmarks[0]}:{self.landmarks[1]}"] if self.landmarks else [])
+
+
+def parse_what(items) -> What:
+    """``["score", "local", "landmarks:5:fps"]`` (or one comma-separated string) -> ``What``."""
+    from ..landmarks import METHODS
+
+    if isinstance(items, str):
+        items = [items]
+    parts = [p.strip() for item in items for p in str(item).split(",") if p.strip()] or ["score"]
+    score = local = False
+    landmarks = None
+    for p in parts:
+        if p == "score":
+            score = True
+        elif p == "local":
+            local = True
+        elif p.startswith("landmarks"):
+            bits = p.split(":")
+            if len(bits) != 3 or not bits[1].isdigit() or int(bits[1]) < 1:
+                raise InputError(f"--what {p!r}: expected landmarks:K:METHOD, e.g. landmarks:5:fps")
+            if bits[2] not in METHODS or bits[2] == "user":
+                raise InputError(f"--what {p!r}: unknown method {bits[2]!r} "
+                                 f"(choose from {', '.join(m for m in METHODS if m != 'user')})")
+            if landmarks is not None:
+                raise InputError("--what: one landmarks:K:METHOD per batch")
+            landmarks = (int(bits[1]), bits[2])
+        else:
+            raise InputError(f"--what {p!r}: choose score, local or landmarks:K:METHOD")
+    return What(score, local, landmarks)
+
+
+def with_defaults(options: dict) -> dict:
+    """``options`` completed with ``DEFAULT_OPTIONS`` (None counts as not given); unknown keys refused."""
+    unknown = set(options) - set(DEFAULT_OPTIONS)
+    if unknown:
+        raise InputError(f"unknown batch option {sorted(unknown)[0]!r}")
+    out = {**DEFAULT_OPTIONS, **{k: v for k, v in options.items() if v is not None}}
+    out["what"] = parse_what(out["what"]).items()
+    return out
+
+
+def params_key(options: dict) -> str:
+    """The ``params`` column: the result-shaping options as sorted compact JSON.
+
+    Options not given take their defaults, so that the key does not depend on
+    how the batch was started; a symmetry map enters by its content hash, so
+    that it does not depend on where the file lies.
+    """
+    key = {k: v for k, v in with_defaults(options).items() if k in KEY_OPTIONS}
+    if key.get("symmetry_map"):
+        key["symmetry_map"] = content_hash(str(key["symmetry_map"]))
+    return json.dumps(key, sort_keys=True, separators=(",", ":"))
+
+
+def score_shape(spec: str, expected_hash: str | None, options: dict, params: str) -> dict:
+    """The row of one shape (see ``schema.COLUMNS``); failures go to its ``error`` column."""
+    row = schema.empty_row()
+    row.update(file=spec, content_hash=expected_hash, params=params, version=__version__, worker=worker_name())
+    t0, c0 = time.perf_counter(), time.process_time()
+    with PeakMemory() as mem:
+        try:
+            _check_file(spec, expected_hash)
+            _fill(row, spec, options)
+        except InputError as exc:
+            row["error"] = _one_line(exc) or "bad input"
+        except MemoryError:
+            row["error"] = "out of memory; try fewer --points"
+        except Exception as exc:  # noqa: BLE001 - an internal failure is one shape's error too
+            row["error"] = f"internal failure: {exc.__class__.__name__}: {_one_line(exc)}"
+    row["seconds"], row["cpu_seconds"] = time.perf_counter() - t0, time.process_time() - c0
+    row["peak_memory_mib"] = mem.mib
+    return row
+
+
+def _one_line(exc) -> str:
+    text = str(exc)
+    return text.splitlines()[0] if text else ""
+
+
+def _check_file(spec: str, expected_hash: str | None) -> None:
+    """InputError if this worker cannot see the file, or sees other bytes than the client hashed."""
+    if spec.startswith("demo:"):
+        return
+    if not os.path.exists(spec):
+        raise InputError(f"no such file on worker {worker_name()} (every worker must see the input paths)")
+    if expected_hash is not None and content_hash(spec) != expected_hash:
+        raise InputError(f"the file on worker {worker_name()} differs from the one the batch hashed "
+                         "(changed since, or another file at the same path)")
+
+
+def _fill(row: dict, spec: str, options: dict) -> None:
+    from ..cli.common import build_shape, load_geometry_or_matrix
+    from ..shapes.io import describe_input
+
+    what = parse_what(options.get("what") or ["score"])
+    info = describe_input(spec)
+    row.update(kind=info["kind"], vertices=info["n_vertices"], faces=info["n_faces"],
+               components=info["components"], problems="; ".join(info["problems"]) or None)
+    loaded = load_geometry_or_matrix(spec, options.get("largest_component", False), options.get("symmetry_map"))
+    seed, effort = options.get("seed", 0), options.get("effort", "default")
+    shape = None
+    if what.score or what.landmarks:
+        shape_kw = {k: options.get(k) for k in ("points", "metric", "geodesic_backend", "seed", "largest_component",
+                                                "no_cache", "target", "target_factor", "symmetry_map")
+                    if options.get(k) is not None}
+        shape = build_shape(spec, loaded=loaded, progress=False, **shape_kw)
+        row.update(n_points=shape.n_points, n_targets=shape.n_targets, covering_radius=shape.covering_radius)
+    if what.score:
+        _score_columns(row, shape, seed, effort)
+    if what.local:
+        _local_columns(row, loaded)
+    if what.landmarks:
+        from ..landmarks import select_landmarks
+
+        k, method = what.landmarks
+        res = select_landmarks(shape, k, method, seed=seed, scores=True, effort=effort)
+        row.update(landmark_method=method, landmarks=[int(v) for v in res.landmarks],
+                   landmark_scores=[math.nan if s is None else float(s) for s in res.scores])
+
+
+def _score_columns(row: dict, shape, seed: int, effort: str) -> None:
+    """The global score's columns, from the report ``shapecond score --json`` prints."""
+    from ..symmetry import objective
+    from ..symmetry.report import score_report
+
+    report, sc = score_report(shape, (), seed=seed, effort=effort)
+    n = sc.n_points
+    moved = np.asarray(sc.witness) != np.arange(n)
+    row.update(sigma_lower=sc.sigma_lower, sigma_upper=sc.sigma_upper, sigma_hat=sc.sigma_hat_lower,
+               swap_floor=float(sc.swap_floor),
+               resolution=None if report["resolution"] is None else report["resolution"]["flag"],
+               witness_moved=float(moved.mean()),
+               witness_displacement=math.sqrt(objective.d2(shape.D, sc.witness) / n))
+    row.update(scale_aware_values(report))
+
+
+def scale_aware_values(report: dict) -> dict:
+    """Columns of the scale-aware score (``schema.SCALE_AWARE_COLUMNS``) from a score report."""
+    d = report.get("scale")
+    if d is None:
+        return {}
+    return {"delta": d["displacement"], "delta_epsilon": d["epsilon"], "delta_moved": d["moved"]}
+
+
+def _local_columns(row: dict, loaded) -> None:
+    from ..deformation import local_score_of_geometry
+
+    if isinstance(loaded, np.ndarray):
+        raise InputError("a distance matrix has no surface to deform: the local score needs a triangle mesh")
+    res = local_score_of_geometry(loaded)
+    row.update(local_score=res.score, local_lambda_min=res.lambda_min,
+               local_zero_modes="; ".join(res.zero_modes) or None)

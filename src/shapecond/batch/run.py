@@ -1,0 +1,154 @@
+"""Scoring a collection: plan, skip what is done, run the rest where asked, append rows, summarise.
+
+``run_batch`` expands the inputs (``inputs.expand_inputs``), hashes them, opens
+the output table (one writer at a time; ``table.Table``), drops the shapes
+whose (file, content hash, parameters) already have a row when resuming, runs
+one ``rows.score_shape`` task per remaining shape through ``parallel.runner``
+(this process, local processes or a Dask cluster), and appends each row as it
+arrives.  A shape that fails, or whose worker dies, becomes an error row; the
+batch goes on.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import statistics
+import time
+from dataclasses import dataclass, field
+
+from ..parallel import check_where, runner
+from . import schema
+from .inputs import content_hashes, expand_inputs
+from .rows import params_key, score_shape, with_defaults
+from .table import Table, table_format
+
+#: How many of the most symmetric shapes and of the failures the summary lists.
+SUMMARY_TOP = 5
+
+
+@dataclass(frozen=True)
+class BatchSummary:
+    """What a batch did: counts, timing, the most symmetric shapes, the failures."""
+
+    output: str
+    shapes: int
+    scored: int            # rows computed by this run
+    resumed: int           # shapes skipped because they already had a row
+    failed: int            # shapes of this batch whose row holds an error (new or resumed)
+    seconds: float
+    median_seconds: float | None
+    where: str
+    most_symmetric: list = field(default_factory=list)   # dicts file, sigma_hat, resolution
+    failures: list = field(default_factory=list)         # dicts file, error
+
+    @property
+    def shapes_per_minute(self) -> float | None:
+        return 60.0 * self.scored / self.seconds if self.scored and self.seconds > 0 else None
+
+    def to_dict(self) -> dict:
+        return {"output": self.output, "shapes": self.shapes, "scored": self.scored, "resumed": self.resumed,
+                "failed": self.failed, "seconds": self.seconds, "median_seconds": self.median_seconds,
+                "shapes_per_minute": self.shapes_per_minute, "where": self.where,
+                "most_symmetric": self.most_symmetric, "failures": self.failures}
+
+
+def _failed_row(spec, digest, params, error) -> dict:
+    row = schema.empty_row()
+    text = str(error).splitlines()[0] if str(error) else ""
+    row.update(file=spec, content_hash=digest, params=params,
+               error=f"{error.__class__.__name__}: {text}".strip(": "))
+    return row
+
+
+def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=None, resume=False,
+              overwrite=False, progress=False) -> BatchSummary:
+    """Score every shape named by ``inputs`` into the table ``out`` (see module docstring).
+
+    Parameters
+    ----------
+    inputs : files, folders (walked recursively) and glob patterns; ``demo:`` specifications too.
+    out : output table, ``.parquet``, ``.csv`` or ``.jsonl``.
+    options : the shape options of ``shapecond score`` (``points``, ``metric``,
+        ``geodesic_backend``, ``seed``, ``largest_component``, ``no_cache``,
+        ``target``, ``target_factor``, ``symmetry_map``) and ``effort``.
+    what : ``score``, ``local``, ``landmarks:K:METHOD`` (``rows.parse_what``).
+    n_jobs, scheduler : where the shapes are scored (``parallel.runner``).
+    resume : keep the rows already in ``out`` and score only the shapes without one;
+        without it an ``out`` holding rows is refused unless ``overwrite``.
+    """
+    t0 = time.perf_counter()
+    options = with_defaults({**(options or {}), "what": what})
+    params = params_key(options)
+    table_format(out)
+    check_where(n_jobs, scheduler)
+    specs = expand_inputs(inputs)
+    mode = "overwrite" if overwrite else ("resume" if resume else "new")
+    with Table(out, mode) as table:
+        hashes = content_hashes(specs)
+        have = {schema.row_key(r): r for r in table.rows}
+        keys = [(s, h, params) for s, h in zip(specs, hashes)]
+        todo = [k for k in keys if k not in have]
+        where = "nothing to do"
+        if todo:
+            where = _score(table, todo, options, n_jobs, scheduler, progress)
+        done = {schema.row_key(r): r for r in table.rows}
+        batch_rows = [done[k] for k in keys]
+    return _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)
+
+
+def _score(table, todo, options, n_jobs, scheduler, progress) -> str:
+    from tqdm import tqdm
+
+    tasks = [(score_shape, (spec, digest, options, params), {}) for spec, digest, params in todo]
+    failed = 0
+    with runner(n_jobs, scheduler) as run, \
+            tqdm(total=len(tasks), desc="scoring", unit="shape", disable=not progress) as bar:
+        for i, row, error in run.iter_tasks(tasks):
+            if error is not None:
+                row = _failed_row(*todo[i], error)
+            table.append(row)
+            failed += row["error"] is not None
+            bar.set_postfix(failed=failed, refresh=False)
+            bar.update(1)
+        return run.label
+
+
+def _summary(out, rows, scored, resumed, seconds, where) -> BatchSummary:
+    ok = [r for r in rows if r["error"] is None]
+    bad = [r for r in rows if r["error"] is not None]
+    times = [r["seconds"] for r in ok if r["seconds"] is not None]
+    ranked = sorted((r for r in ok if r["sigma_hat"] is not None), key=lambda r: (-r["sigma_hat"], r["file"]))
+    top = [{"file": _short(r["file"]), "sigma_hat": r["sigma_hat"], "resolution": r["resolution"]}
+           for r in ranked[:SUMMARY_TOP]]
+    failures = [{"file": _short(r["file"]), "error": r["error"]} for r in bad[:SUMMARY_TOP]]
+    return BatchSummary(out, len(rows), scored, resumed, len(bad), seconds,
+                        statistics.median(times) if times else None, where, top, failures)
+
+
+def _short(path: str) -> str:
+    """A path relative to the working folder when it lies below it."""
+    if path.startswith("demo:"):
+        return path
+    rel = os.path.relpath(path)
+    return path if rel.startswith("..") else rel
+
+
+def format_summary(s: BatchSummary) -> str:
+    """The one-screen text summary of ``shapecond batch``."""
+    def num(v):
+        return "inf" if v == math.inf else f"{v:.4g}"
+
+    lines = [f"shapes      {s.shapes}: {s.scored} scored now, {s.resumed} already in {s.output}, {s.failed} failed",
+             f"where       {s.where}",
+             f"time        {s.seconds:.1f} s"
+             + (f", {s.shapes_per_minute:.2f} shapes/min" if s.shapes_per_minute else "")
+             + (f", median {s.median_seconds:.2f} s per shape" if s.median_seconds is not None else "")]
+    if s.most_symmetric:
+        lines.append("most symmetric (sigma_hat, resolution flag):")
+        lines += [f"  {num(r['sigma_hat']):>8}  {r['resolution'] or '-':28s} {r['file']}" for r in s.most_symmetric]
+    if s.failures:
+        lines.append(f"failed ({s.failed}; the first {len(s.failures)}):" if s.failed > len(s.failures)
+                     else "failed:")
+        lines += [f"  {r['file']}: {r['error']}" for r in s.failures]
+    return "\n".join(lines)

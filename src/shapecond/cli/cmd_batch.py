@@ -1,0 +1,53 @@
+"""``shapecond batch INPUT... --out FILE``: one row per shape, for whole collections.
+
+See ``shapecond.batch`` for the table, resuming and where the work runs.
+"""
+
+from __future__ import annotations
+
+import click
+
+from ..batch import format_summary, run_batch
+from ..errors import InputError
+from .common import emit_json, json_option, pop_shape_options, progress_enabled, shape_options
+
+#: Exit status when some shapes failed (their rows hold the error).
+EXIT_SOME_FAILED = 3
+
+
+@click.command("batch")
+@click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
+@click.option("--out", "-o", "out", required=True, type=click.Path(dir_okay=False),
+              help="Output table: .parquet (needs pyarrow), .csv or .jsonl.")
+@shape_options
+@click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
+              show_default=True, help="Work spent by the witness searches.")
+@click.option("--what", "what", multiple=True, default=("score",), show_default=True,
+              help="What to compute besides info, repeatable or comma-separated: score, local, "
+                   "landmarks:K:METHOD (e.g. landmarks:5:fps).")
+@click.option("--jobs", "-j", type=int, default=1, show_default=True, help="Local worker processes (joblib).")
+@click.option("--scheduler", default=None,
+              help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
+                   "LocalCluster with W workers.")
+@click.option("--resume", is_flag=True, help="Keep the rows in --out; score only the shapes without one.")
+@click.option("--overwrite", is_flag=True, help="Start --out afresh even if it holds rows.")
+@json_option
+def command(inputs, out, effort, what, jobs, scheduler, resume, overwrite, as_json, **kw):
+    """Score every shape in INPUT... (files, folders, glob patterns) into one table.
+
+    One row per shape with info's counts and problems, the global score, and on
+    request the local score and landmarks; a shape that fails gets an error row
+    and the batch goes on.  Exit status 0 when every shape was scored, 3 when
+    some failed.
+    """
+    if resume and overwrite:
+        raise InputError("--resume and --overwrite exclude each other")
+    options = pop_shape_options(kw)
+    options["effort"] = effort
+    summary = run_batch(inputs, out, options, what=what, n_jobs=jobs, scheduler=scheduler, resume=resume,
+                        overwrite=overwrite, progress=progress_enabled())
+    if as_json:
+        emit_json(summary)
+    else:
+        click.echo(format_summary(summary))
+    return EXIT_SOME_FAILED if summary.failed else 0

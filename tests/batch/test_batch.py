@@ -1,0 +1,235 @@
+"""``shapecond batch``: inputs, the row of one shape, the output table, resuming, errors."""
+
+import json
+import math
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+from shapecond.batch import schema
+from shapecond.batch.inputs import content_hash, expand_inputs
+from shapecond.batch.rows import params_key, parse_what, score_shape
+from shapecond.batch.run import run_batch
+from shapecond.batch.table import Table
+from shapecond.errors import InputError
+
+from tests.conftest import run_cli
+
+#: columns that depend on where and when a row was computed, not on the shape
+VOLATILE = ("seconds", "cpu_seconds", "peak_memory_mib", "worker")
+
+
+def stable(rows):
+    """Rows without the volatile columns, sorted by file (for comparing runs)."""
+    return sorted(({k: v for k, v in r.items() if k not in VOLATILE} for r in rows), key=lambda r: r["file"])
+
+
+def read_table(path):
+    path = Path(path)
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        return [schema.coerce_row(r) for r in pq.read_table(path).to_pylist()]
+    if path.suffix == ".csv":
+        import csv
+
+        return [schema.coerce_row(r) for r in csv.DictReader(path.read_text().splitlines())]
+    return [schema.coerce_row(json.loads(line)) for line in path.read_text().splitlines()]
+
+
+# --- inputs ------------------------------------------------------------------------------
+
+def test_folders_globs_and_files_expand_once_each(shape_dir, tmp_path):
+    (shape_dir / "notes.txt").write_text("not a point cloud")
+    (shape_dir / ".hidden.off").write_text("OFF")
+    names = expand_inputs([shape_dir, str(shape_dir / "blob*.off"), shape_dir / "blob0.off", "demo:sphere"])
+    rel = [os.path.relpath(n, shape_dir) if not n.startswith("demo:") else n for n in names]
+    assert rel == ["blob0.off", "blob1.off", "blob2.off", "sub/ball.off", "demo:sphere"]
+    assert expand_inputs([tmp_path / "missing.off"]) == [str(tmp_path / "missing.off")]  # becomes an error row
+    with pytest.raises(InputError, match="no file matches"):
+        expand_inputs([str(tmp_path / "*.ply")])
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(InputError, match="no shape files"):
+        expand_inputs([tmp_path / "empty"])
+
+
+def test_tosca_pairs_hash_both_files(tmp_path):
+    (tmp_path / "a.vert").write_text("0 0 0\n1 0 0\n0 1 0\n")
+    (tmp_path / "a.tri").write_text("1 2 3\n")
+    assert expand_inputs([tmp_path]) == [str(tmp_path / "a.vert")]
+    before = content_hash(str(tmp_path / "a.vert"))
+    (tmp_path / "a.tri").write_text("1 3 2\n")
+    assert content_hash(str(tmp_path / "a.vert")) != before
+    assert content_hash(str(tmp_path / "none.off")) is None
+
+
+def test_what_is_parsed_and_checked():
+    w = parse_what(["score,local", "landmarks:4:fps"])
+    assert (w.score, w.local, w.landmarks) == (True, True, (4, "fps"))
+    assert parse_what(["local"]).items() == ["local"]
+    for bad in ("landmarks:0:fps", "landmarks:3:nope", "landmarks:3", "sigma"):
+        with pytest.raises(InputError, match="--what"):
+            parse_what([bad])
+    # the key does not depend on how --what was spelled
+    assert params_key({"what": ["local", "score"]}) == params_key({"what": ["score,local"]})
+
+
+# --- one row is what the single-shape commands print ---------------------------------------
+
+def test_a_row_holds_what_info_score_local_and_landmarks_print(shape_dir, capsys):
+    path = shape_dir / "blob1.off"
+    opts = {"points": 24, "seed": 3, "effort": "quick", "what": ["score", "local", "landmarks:3:fps"]}
+    row = score_shape(str(path), content_hash(str(path)), opts, params_key(opts))
+    assert row["error"] is None and set(row) == set(schema.NAMES)
+    _, out, _ = run_cli(capsys, "info", path, "--json")
+    info = json.loads(out)
+    assert (row["vertices"], row["faces"], row["components"]) == (info["n_vertices"], info["n_faces"],
+                                                                  info["components"])
+    _, out, _ = run_cli(capsys, "score", path, "--points", 24, "--seed", 3, "--effort", "quick", "--json")
+    sc = json.loads(out)
+    assert row["sigma_lower"] == pytest.approx(sc["sigma"]["lower"], rel=1e-12)
+    assert row["sigma_hat"] == pytest.approx(sc["sigma_hat"]["lower"], rel=1e-12)
+    assert row["resolution"] == sc["resolution"]["flag"]
+    assert (row["n_points"], row["n_targets"]) == (sc["n_points"], sc["n_targets"])
+    moved = sum(w != s for w, s in zip(sc["witness_vertices"], sc["samples"])) / sc["n_points"]
+    assert row["witness_moved"] == pytest.approx(moved)
+    assert 0 < row["witness_displacement"] <= 1
+    _, out, _ = run_cli(capsys, "local", path, "--json")
+    assert row["local_score"] == pytest.approx(json.loads(out)["score"], rel=1e-9)
+    _, out, _ = run_cli(capsys, "landmarks", path, "-k", 3, "--method", "fps", "--points", 24, "--seed", 3,
+                        "--effort", "quick", "--scores", "--json")
+    lm = json.loads(out)
+    assert row["landmarks"] == lm["landmarks"]
+    assert row["landmark_scores"] == pytest.approx(lm["scores"], rel=1e-12)
+    assert row["peak_memory_mib"] > 10 and row["seconds"] > 0 and row["cpu_seconds"] > 0
+
+
+def test_bad_inputs_become_error_rows_and_exit_3(broken_dir, tmp_path, capsys):
+    out = tmp_path / "t.jsonl"
+    status, stdout, err = run_cli(capsys, "batch", broken_dir, "--points", 16, "--out", out, "--json")
+    assert status == 3, err
+    summary = json.loads(stdout)
+    rows = {Path(r["file"]).name: r for r in read_table(out)}
+    assert summary["shapes"] == len(rows) == 8 and summary["failed"] == 7
+    assert rows["good.off"]["error"] is None and rows["good.off"]["sigma_lower"] > 0
+    for name, pattern in {"empty.off": "empty", "garbage.off": "not a readable mesh",
+                          "binary.ply": "not a readable mesh", "wrong_shape.npy": r"\(4, 5\)",
+                          "nan.off": "NaN", "two_parts.off": "2 connected components",
+                          "dangling.off": "no such file on worker"}.items():
+        assert re.search(pattern, rows[name]["error"]), (name, rows[name]["error"])
+        assert "\n" not in rows[name]["error"]
+    # info's columns are kept when only scoring failed
+    assert rows["two_parts.off"]["components"] == 2 and "2 connected components" in rows["two_parts.off"]["problems"]
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root reads files whatever their permissions")
+def test_an_unreadable_file_is_an_error_row(shape_dir, tmp_path):
+    locked = tmp_path / "locked.off"
+    locked.write_bytes((shape_dir / "blob0.off").read_bytes())
+    locked.chmod(0)
+    summary = run_batch([locked], tmp_path / "t.csv", {"points": 16})
+    assert summary.failed == 1 and "ermission" in summary.failures[0]["error"]
+
+
+# --- the table ---------------------------------------------------------------------------
+
+def _row(i, **kw):
+    row = schema.empty_row()
+    row.update(file=f"/s/{i}.off", content_hash=f"h{i}", params="{}", sigma_lower=math.inf, sigma_hat=1.5 * i,
+               landmarks=[i, 7], landmark_scores=[math.inf, 0.25], vertices=10 + i, problems="a; b", **kw)
+    return row
+
+
+@pytest.mark.parametrize("suffix", [".parquet", ".csv", ".jsonl"])
+def test_rows_survive_a_round_trip_and_one_writer_at_a_time(tmp_path, suffix):
+    path = tmp_path / f"t{suffix}"
+    rows = [_row(1), _row(2, error="boom")]
+    with Table(path) as table:
+        for r in rows:
+            table.append(r)
+        with pytest.raises(InputError, match="being written by another batch"):
+            with Table(path, "resume"):
+                pass
+    with Table(path, "resume") as table:
+        again = table.rows
+    assert [{k: r[k] for k in schema.NAMES} for r in again] == [schema.coerce_row(r) for r in rows]
+    assert again[0]["sigma_lower"] == math.inf and again[0]["landmarks"] == [1, 7]
+    assert read_table(path) == again
+    with pytest.raises(InputError, match="already holds 2 rows"):
+        with Table(path):
+            pass
+    with Table(path, "overwrite") as table:
+        assert table.rows == []
+    assert read_table(path) == [] and not list(tmp_path.glob(".*"))  # no lock or journal left
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl"])
+def test_a_torn_last_line_is_cut(tmp_path, suffix):
+    path = tmp_path / f"t{suffix}"
+    with Table(path) as table:
+        table.append(_row(1))
+    with open(path, "a") as fh:
+        fh.write('"/s/2.off",h2,{')  # a writer died mid-line
+    with Table(path, "resume") as table:
+        assert [r["file"] for r in table.rows] == ["/s/1.off"]
+        table.append(_row(3))
+    assert [r["file"] for r in read_table(path)] == ["/s/1.off", "/s/3.off"]
+
+
+def test_a_parquet_journal_left_by_a_killed_batch_is_folded_in(tmp_path):
+    path = tmp_path / "t.parquet"
+    with Table(path) as table:
+        table.append(_row(1))
+    journal = tmp_path / ".t.parquet.journal"
+    with open(journal, "w") as fh:  # row 1 again (killed between rewrite and journal reset) and row 2
+        for r in (_row(1), _row(2)):
+            fh.write(json.dumps({k: r[k] for k in schema.NAMES}).replace("Infinity", '"inf"') + "\n")
+    with Table(path, "resume") as table:
+        assert [r["file"] for r in table.rows] == ["/s/1.off", "/s/2.off"]
+        assert [r["file"] for r in read_table(path)] == ["/s/1.off", "/s/2.off"]  # rewritten on opening
+    assert not journal.exists()
+
+
+def test_output_errors_are_refused_before_any_work(shape_dir, tmp_path, capsys):
+    for args, message in [(["--out", tmp_path / "t.xlsx"], "unknown table format"),
+                          (["--out", tmp_path / "no" / "t.csv"], "does not exist"),
+                          (["--out", tmp_path / "t.csv", "--resume", "--overwrite"], "exclude each other"),
+                          (["--out", tmp_path / "t.csv", "--what", "landmarks:2:magic"], "unknown method"),
+                          (["--out", tmp_path / "t.csv", "--scheduler", "local:0"], "local:W"),
+                          (["--out", tmp_path / "t.csv", "--jobs", "2", "--scheduler", "local:2"],
+                           "exclude each other")]:
+        status, _, err = run_cli(capsys, "batch", shape_dir / "blob0.off", *args)
+        assert status == 2 and message in err and err.count("\n") == 1, (args, err)
+    (tmp_path / "notes.csv").write_text("a,b\n1,2\n")
+    status, _, err = run_cli(capsys, "batch", shape_dir / "blob0.off", "--out", tmp_path / "notes.csv",
+                             "--resume")
+    assert status == 2 and "columns are not those" in err
+
+
+# --- resuming ----------------------------------------------------------------------------
+
+def test_resume_skips_done_shapes_and_rescores_changed_ones(shape_dir, tmp_path):
+    work = tmp_path / "in"
+    work.mkdir()
+    for name in ("blob0.off", "blob1.off"):
+        (work / name).write_bytes((shape_dir / name).read_bytes())
+    out = tmp_path / "t.parquet"
+    first = run_batch([work], out, {"points": 16})
+    assert (first.scored, first.failed) == (2, 0)
+    again = run_batch([work], out, {"points": 16}, resume=True)
+    assert (again.scored, again.resumed, again.where) == (0, 2, "nothing to do")
+    (work / "blob1.off").write_bytes((shape_dir / "blob2.off").read_bytes())  # new content, same name
+    third = run_batch([work], out, {"points": 16}, resume=True)
+    assert (third.scored, third.resumed) == (1, 1)
+    other = run_batch([work], out, {"points": 18}, resume=True)  # other parameters: other rows
+    assert other.scored == 2
+    assert len(read_table(out)) == 5
+
+
+def test_the_readme_documents_every_column():
+    readme = (Path(__file__).parents[2] / "README.md").read_text()
+    table = readme[readme.index("## Scoring collections"):]
+    table = table[:table.index("\n\n", table.index("| column |"))]
+    assert all(f"`{name}`" in table for name in schema.NAMES), [n for n in schema.NAMES if f"`{n}`" not in table]
