@@ -61,7 +61,7 @@ DEFAULT_LANDMARKS = 10
 #: Which samples a target has (module docstring).
 PROTOCOLS = ("corresponding", "independent")
 #: bump when the landmark methods change, to invalidate cached selections
-LANDMARK_CACHE_VERSION = "3"
+LANDMARK_CACHE_VERSION = "4"  # 4: geodesics from shapes.heat (metric CACHE_VERSION 2)
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 
