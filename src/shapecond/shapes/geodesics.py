@@ -59,12 +59,16 @@ class DistanceSolver:
         self._rows = None  # a function computing many rows at once, when the backend has one
         if backend == "heat" and F is not None:
             from .heat import BLOCK, HeatMethod
+            from .helper import SplitRows, helper_allowed
             from .intrinsic import intrinsic_delaunay_cover
 
             tri = intrinsic_delaunay_cover(V, F)
             if tri is not None:
                 self._rows = HeatMethod(tri, self.n).distances
                 self.block = BLOCK
+                if helper_allowed():  # the other core computes half of every block
+                    self._rows = SplitRows(self._rows, self.n, BLOCK)
+                    self.block = 2 * BLOCK
                 return
         if backend == "euclidean":
             self._one = lambda s: np.linalg.norm(V - V[s], axis=1)
