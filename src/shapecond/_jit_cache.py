@@ -1,9 +1,8 @@
 """Where numba keeps the compiled kernels between processes.
 
 Every numba kernel of shapecond is compiled with ``cache=True``: the first
-process on a machine compiles them (about 20 s of CPU for the whole pipeline,
-measured by benchmarks/bench_first_run.py) and writes the machine code to disk;
-later processes load it in well under a second.  numba writes next to the
+process on a machine compiles them and writes the machine code to disk; later
+processes load it instead of compiling.  numba writes next to the
 sources (``__pycache__`` in the installed package) or, when that folder is
 read-only, under the user's cache folder (``~/.cache/numba``); when neither is
 writable it refuses to import a ``cache=True`` function at all.  So, unless

@@ -1,6 +1,6 @@
 """Geodesic (and Euclidean) distances from sets of source vertices.
 
-Backends (DESIGN.md section 3, "Geodesics"):
+Backends:
 
 ``heat``       the heat method (Crane et al. 2013) on the intrinsic Delaunay
                triangulation of the tufted cover (the "robust" Laplacian); the

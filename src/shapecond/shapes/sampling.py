@@ -1,11 +1,13 @@
-"""Farthest-point sampling (FPS) under a chosen metric (DESIGN.md section 1).
+"""Farthest-point sampling (FPS) under a chosen metric.
 
 As in the paper, the first sample is the vertex farthest from a seeded random
 vertex; each next sample is the vertex farthest from all samples so far.  User
 landmarks come first, in the order given.  With a symmetry map, every sample is
 added together with its mirror image so that the sample set is closed under the
-map (symmetry-consistent sampling, issue 4): the paper's bijection score is then
-∞ for an exactly symmetric mesh.
+map (symmetry-consistent sampling): the paper's bijection score is then
+∞ for an exactly symmetric mesh.  When the solver computes many rows per solve,
+the rows of the next steps are fetched ahead in blocks (``_Rows``); the samples
+are exactly those of one row at a time.
 """
 
 from __future__ import annotations
@@ -21,8 +23,8 @@ from ..errors import InputError
 #: bytes, so that D can be symmetrised as (D + Dᵀ)/2; beyond it, D[i, j] for
 #: j < i comes from the later row only (the heat method is symmetric up to ~1 %).
 ROW_BUDGET_BYTES = 512 * 2**20
-#: Rows fetched ahead but not used yet are kept for this many blocks.
-SPARE_BLOCKS = 8
+#: Rows fetched ahead but not used yet are kept up to this many bytes (at least one block of them).
+SPARE_BYTES = 128 * 2**20
 
 
 @dataclass(frozen=True)
@@ -96,7 +98,7 @@ def _farthest_order(front: _Front, boundaries, symmetry, row_of):
 
 
 class _Rows:
-    """Rows of the solver, fetched ahead in blocks of ``solver.block`` (issue 16).
+    """Rows of the solver, fetched ahead in blocks of ``solver.block``.
 
     FPS is sequential: the next sample depends on the row of the last one.  When
     the solver solves many sources together, the rows of the next steps are
@@ -119,7 +121,8 @@ class _Rows:
             for v, row in zip(todo, self.solver.distances(todo)):
                 self.spare[v] = row
             self.computed += len(todo)
-        for v in list(self.spare)[: max(0, len(self.spare) - SPARE_BLOCKS * self.block - len(todo))]:
+        keep = max(self.block, SPARE_BYTES // (8 * self.solver.n))
+        for v in list(self.spare)[: max(0, len(self.spare) - keep - len(todo))]:
             del self.spare[v]  # the oldest wrong guesses: bounded memory
 
     def get(self, v: int, front: _Front, boundaries, symmetry) -> np.ndarray:
