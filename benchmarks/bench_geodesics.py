@@ -366,6 +366,9 @@ READING = """Reading (2026-11-23, load 2.5-3.2 from other agents' jobs throughou
   1.3 at 4-12); FPS on a cheap proxy metric for the dense targets (it would change the samples X
   themselves, and the exact lookahead already fetches 96-98 % useful rows); threads (cholespy holds
   the GIL: two threads ran slower than one).
+* Null shapes: the same resolution flag on all eight, the same σ on five; on david0, michael0 and
+  victoria0 FPS took other samples after a round-off near-tie, and σ moved by +0.2 %, -1.3 % and
+  +3.8 % (the witness search's result on a slightly different point set, not a change of distances).
 * Score: cold minus warm is the geodesics (7 s against 28 s with potpourri3d in the same run); the
   warm run is the two witness searches (σ and the resolution report, 17.7 of 19.6 s here), imports
   (1.2 s: every sub-command and scipy.stats, trimesh, numba are imported eagerly) and 0.24 s to
