@@ -79,11 +79,7 @@ try:  # optional: limits BLAS threads around ARPACK
 except ImportError:  # pragma: no cover
     _limits = None
 
-try:  # a dependency; guarded so that a platform without its wheel still works (SuperLU)
-    from cholespy import CholeskySolverD as _Cholesky, MatrixType as _MatrixType
-except ImportError:  # pragma: no cover
-    _Cholesky = _MatrixType = None
-
+from .. import cholesky
 from ..errors import InputError
 
 SHIFT = 1e-5  # relative to the proximity stiffness 2 of the unit-area mesh
@@ -92,7 +88,7 @@ BACKENDS = ("cholmod", "superlu")
 
 def default_backend() -> str:
     """``"cholmod"`` (sparse Cholesky through cholespy) when importable, else ``"superlu"``."""
-    return "cholmod" if _Cholesky is not None else "superlu"
+    return "cholmod" if cholesky.available() else "superlu"
 
 
 def vertex_graph(H: sp.spmatrix) -> sp.csr_matrix:
@@ -185,16 +181,14 @@ class ShiftInvertSolver:
         backend = default_backend() if backend is None else backend
         if backend not in BACKENDS:
             raise InputError(f"unknown solver backend {backend!r}; choose one of {', '.join(BACKENDS)}")
-        if backend == "cholmod" and _Cholesky is None:
+        if backend == "cholmod" and not cholesky.available():
             raise InputError("the cholmod backend needs the cholespy package (pip install cholespy)")
         A = self.H + sp.diags(self.shift * self.mass)
         self._chol = self.lu = None
         if backend == "cholmod":
-            L = sp.tril(A, format="csc")  # CHOLMOD reads the lower triangle
             try:
-                self._chol = _Cholesky(self.n_dof, L.indptr.astype(np.int32), L.indices.astype(np.int32),
-                                       np.ascontiguousarray(L.data, dtype=np.float64), _MatrixType.CSC)
-            except ValueError:  # not positive definite in floating point: LU does not need it
+                self._chol = cholesky.SparseCholesky(A)
+            except cholesky.NotPositiveDefinite:  # LU does not need it
                 backend = "superlu"
         if backend == "superlu":
             order = nested_dissection(V, vertex_graph(self.H))
@@ -212,10 +206,7 @@ class ShiftInvertSolver:
         """``A^{-1} b`` for a vector or (3n, k) block."""
         self.n_solves += 1 if b.ndim == 1 else b.shape[1]
         if self._chol is not None:
-            b = np.ascontiguousarray(b, dtype=np.float64)
-            x = np.empty_like(b)
-            self._chol.solve(b, x)
-            return x
+            return self._chol.solve(b)
         return self.lu.solve(np.ascontiguousarray(b[self.perm]))[self.iperm]
 
     def _columns(self, dofs: np.ndarray) -> np.ndarray:

@@ -62,7 +62,7 @@ DEFAULT_LANDMARKS = 10
 #: Which samples a target has (module docstring).
 PROTOCOLS = ("corresponding", "independent")
 #: bump when the landmark methods change, to invalidate cached selections
-LANDMARK_CACHE_VERSION = "4"
+LANDMARK_CACHE_VERSION = "5"  # 5: δ(ε) scores, cnbs-scale; geodesics from shapes.heat
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 

@@ -31,7 +31,7 @@ from shapecond.shapes.metric import cache_dir
 from shapecond.shapes.sampling import farthest_point_sampling
 from shapecond.shapes.validate import face_areas
 
-CACHE_VERSION = "matching-rows-1"
+CACHE_VERSION = "matching-rows-2"
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,6 +92,7 @@ class _RecordingSolver:
 
     def __init__(self, solver: DistanceSolver):
         self.solver, self.n, self.kept = solver, solver.n, {}
+        self.block, self.guess = getattr(solver, "block", 1), getattr(solver, "guess", None)
 
     def distances(self, sources):
         out = self.solver.distances(sources)

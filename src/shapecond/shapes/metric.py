@@ -27,7 +27,7 @@ from .geometry import Geometry
 from .sampling import farthest_point_sampling
 from .validate import check_distance_matrix
 
-CACHE_VERSION = "1"
+CACHE_VERSION = "2"  # 2: heat distances from shapes.heat (blocks), same as potpourri3d to round-off
 TARGETS = ("samples", "dense")
 
 
