@@ -3,7 +3,8 @@
 Prints σ lower/upper/exact, the size-free σ̂ = σ√N, the condition-number
 bracket σ ≤ κ ≤ 2σ + 1 (Theorem 4.1), the witness map (the near-isometry that
 makes the shape hard to match) and, for dense targets on a mesh, whether the
-witness is a symmetry within sampling resolution (issue 4).
+witness is a symmetry within sampling resolution, and a one-line verdict of what
+the numbers mean for matching (``symmetry.verdict``).
 """
 
 from __future__ import annotations
@@ -11,29 +12,9 @@ from __future__ import annotations
 import click
 import numpy as np
 
-from ..symmetry.resolution import resolution_for_shape
-from ..symmetry.score import symmetry_score
-from .common import build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
+from ..symmetry.report import score_shape
+from .common import Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
     pop_shape_options, shape_options
-
-
-def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                 effort="default") -> tuple[dict, object]:
-    """JSON-ready report of one metric shape (keys of issue 3 item 9 and issue 4 item 4)."""
-    lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
-    sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
-                        seed=seed, effort=effort)
-    out = sc.to_dict()
-    out["landmarks"] = [int(v) for v in landmark_ids]
-    out["samples"] = [int(v) for v in shape.sample_ids]
-    out["target"] = shape.target
-    res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
-    out["resolution"] = None if res is None else res.to_dict()
-    if shape.geometry is None:
-        out["witness_vertices"] = None
-    else:
-        out["witness_vertices"] = [int(v) for v in shape.target_ids[sc.witness]]
-    return out, sc
 
 
 @click.command("score")
@@ -44,7 +25,7 @@ def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=1
 @click.option("--exact", "exact", is_flag=True, help="Compute σ exactly (enumeration or branch and bound "
               "within --time-limit); by default only when enumeration is quick (N <= 9).")
 @click.option("--upper", is_flag=True, help="LP upper bound when σ is not known exactly (small N only).")
-@click.option("--time-limit", type=float, default=10.0, show_default=True,
+@click.option("--time-limit", type=Float(0.0, lo_open=True), default=10.0, show_default=True,
               help="Seconds for each of the exact and LP solves.")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Work spent by the witness search.")
@@ -60,10 +41,12 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
     t0 = time.perf_counter()
     opts = pop_shape_options(kw)
     ids = parse_ids(landmarks)
-    loaded = load_geometry_or_matrix(input_spec, opts.get("largest_component", False), opts.get("symmetry_map"))
+    loaded = load_geometry_or_matrix(input_spec, opts.get("largest_component", False), opts.get("symmetry_map"),
+                                     opts.get("force", False))
     shape = build_shape(input_spec, landmarks=ids, loaded=loaded, **opts)
-    report, sc = score_report(shape, ids, exact=True if exact else "auto", upper=upper,
-                              time_limit=time_limit, seed=opts.get("seed", 0), effort=effort)
+    result = score_shape(shape, ids, exact=True if exact else "auto", upper=upper, time_limit=time_limit,
+                         seed=opts.get("seed", 0), effort=effort, force=opts.get("force", False))
+    report, sc = result.to_dict(), result.score
     if witness_png:
         if shape.geometry is None:
             info("--witness-png needs a mesh or point cloud; no picture written")
@@ -87,6 +70,7 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
         r = report["resolution"]
         click.echo(f"resolution        {r['flag']} (sigma {fmt(r['sigma_lo'])} at M={r['n_targets_lo']}, "
                    f"{fmt(r['sigma_hi'])} at M={r['n_targets_hi']}; covering radius {fmt(r['covering_radius'])})")
+    click.echo(f"verdict           {report['verdict']}")
     for note in report["notes"]:
         info(f"note: {note}")
     click.echo(f"seconds           {report['seconds']:.2f}")

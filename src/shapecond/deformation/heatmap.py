@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..jsonable import jsonable
 from ..errors import InputError
 from .local_score import LAMBDA_REF, ZERO_TOL, LocalProblem, score_from_lambda
 
@@ -155,8 +156,8 @@ class LocalLandmarks:
 
     def to_dict(self, ids=None) -> dict:
         ids = np.arange(max(self.landmarks, default=0) + 1) if ids is None else np.asarray(ids)
-        return {"landmarks": [int(ids[v]) for v in self.landmarks], "scores": list(self.scores),
-                "initial": self.initial, "seconds": self.seconds}
+        return jsonable({"landmarks": [int(ids[v]) for v in self.landmarks], "scores": list(self.scores),
+                "initial": self.initial, "seconds": self.seconds})
 
 
 def select_local_landmarks(problem: LocalProblem, k: int, start=(), n_modes: int = N_MODES,

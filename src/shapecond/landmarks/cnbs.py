@@ -324,8 +324,11 @@ def _swap_witness(D, n, L, base):
 
 def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
                    n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
-                   resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False):
+                   resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False,
+                   base=None):
     """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
+
+    ``base``: the ``witness_search`` result with ``fixed`` fixed, when already known.
 
     Returns
     -------
@@ -339,7 +342,8 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
     L = [int(v) for v in fixed]
     if k < 0 or k + len(L) > n:
         raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(L)} already fixed)")
-    base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
+    if base is None:
+        base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort)
     initial = float(base.sigma)
     new, scores, maps = [], [], []
     for step in range(k):

@@ -1,6 +1,6 @@
 """Geodesic (and Euclidean) distances from sets of source vertices.
 
-Backends (DESIGN.md section 3, "Geodesics"):
+Backends:
 
 ``heat``       potpourri3d's heat method (Crane et al. 2013) with the intrinsic
                Delaunay ("robust") Laplacian; the default.  Point clouds use
@@ -12,6 +12,8 @@ Backends (DESIGN.md section 3, "Geodesics"):
 ``euclidean``  straight-line distances in R^3.
 
 Every result records the backend that produced it (``DistanceSolver.backend``).
+Solvers work on the shape scaled to a unit bounding-box diagonal and scale the
+distances back, so the same mesh in any unit gives the same (scaled) result.
 """
 
 from __future__ import annotations
@@ -20,8 +22,11 @@ import numpy as np
 
 from ..errors import InputError
 from .geometry import Geometry
+from .validate import unit_length
 
 BACKENDS = ("heat", "fmm", "exact", "euclidean")
+#: potpourri3d's point-cloud solver builds a 30-nearest-neighbour graph.
+MIN_CLOUD_POINTS = 31
 
 
 class DistanceSolver:
@@ -44,7 +49,9 @@ class DistanceSolver:
         self.geometry = geometry
         self.backend = backend
         self.n = geometry.n_vertices
-        V = np.ascontiguousarray(geometry.vertices, dtype=np.float64)
+        self.unit = unit_length(geometry.vertices) or 1.0
+        V = (geometry.vertices - geometry.vertices.mean(axis=0)) / self.unit
+        V = np.ascontiguousarray(V, dtype=np.float64)
         F = None if geometry.faces is None else np.ascontiguousarray(geometry.faces, dtype=np.int64)
         if backend == "euclidean":
             self._one = lambda s: np.linalg.norm(V - V[s], axis=1)
@@ -54,7 +61,14 @@ class DistanceSolver:
         if F is None:
             if backend != "heat":
                 raise InputError(f"the {backend} backend needs a mesh; point clouds use the heat backend")
-            solver = pp3d.PointCloudHeatSolver(V)
+            if self.n < MIN_CLOUD_POINTS:
+                raise InputError(f"{geometry.name}: geodesics on a point cloud need at least {MIN_CLOUD_POINTS} "
+                                 f"points, got {self.n} (use --metric euclidean)")
+            try:
+                solver = pp3d.PointCloudHeatSolver(V)
+            except RuntimeError as exc:  # geometry-central refuses clouds it cannot mesh locally
+                raise InputError(f"{geometry.name}: the point cloud has no usable local surface "
+                                 f"({str(exc).splitlines()[0][-80:]})") from None
             self._one = lambda s: np.asarray(solver.compute_distance(int(s)), dtype=np.float64)
         elif backend == "heat":
             solver = pp3d.MeshHeatMethodDistanceSolver(V, F)
@@ -76,7 +90,7 @@ class DistanceSolver:
             raise InputError(f"source vertex out of range 0..{self.n - 1}")
         out = np.empty((sources.size, self.n), dtype=np.float64)
         for k, s in enumerate(sources):
-            row = self._one(s)
+            row = self._one(s) * self.unit
             if not np.all(np.isfinite(row)):
                 raise InputError(f"{self.geometry.name}: the {self.backend} backend returned non-finite "
                                  "distances (is the mesh broken or disconnected?)")

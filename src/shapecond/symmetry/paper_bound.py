@@ -34,8 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import eigh
 
+from ..jsonable import jsonable
 from ..errors import TooLargeError
-from .exact import check_instance
+from .objective import check_instance
 
 #: Largest N for the dense (N·M)-square eigenproblem of this diagnostic.
 MAX_PAPER_POINTS = 20
@@ -72,7 +73,7 @@ class PaperDiagnostic:
     is_bound: bool = False
 
     def to_dict(self) -> dict:
-        return {
+        return jsonable({
             "diagnostic": "paper Section 4.2 eigenvalue quantity; NOT an upper bound",
             "lambda_0": self.lambda_0,
             "paper_value": self.paper_value,
@@ -81,7 +82,7 @@ class PaperDiagnostic:
             "n_assignments": self.n_assignments,
             "seconds": self.seconds,
             "is_bound": self.is_bound,
-        }
+        })
 
 
 def paper_matrices(D: np.ndarray, n: int):

@@ -72,9 +72,10 @@ import numpy as np
 import scipy.sparse as sp
 import highspy
 
+from ..jsonable import jsonable
 from ..errors import TooLargeError
 from . import objective
-from .exact import check_instance
+from .objective import check_instance
 
 #: Largest number of free points (bijection case) the LP is built for unless forced.
 MAX_LP_POINTS = 16
@@ -94,8 +95,8 @@ class LPResult:
     n_cuts: int = 0
 
     def to_dict(self) -> dict:
-        """The fields as a dict (numpy arrays included; ``cli.common.jsonable`` converts them)."""
-        return asdict(self)
+        """The fields as a dict as JSON-ready values (``shapecond.jsonable``)."""
+        return jsonable(asdict(self))
 
 
 def lp_size(n_free: int, n_targets: int) -> int:

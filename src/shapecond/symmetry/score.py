@@ -26,7 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shapecond.jsonable import jsonable
 from shapecond.errors import TooLargeError
+from shapecond.limits import check_cost, search_seconds
 from shapecond.symmetry.search import _prepare, best_single_swap, witness_search
 
 #: ``exact="auto"`` computes σ exactly when enumeration is quick (<= this many maps).
@@ -81,7 +83,7 @@ class SymmetryScore:
         return 2.0 * self.sigma_upper + 1.0
 
     def to_dict(self) -> dict:
-        return {
+        return jsonable({
             "n_points": self.n_points,
             "n_targets": self.n_targets,
             "landmarks": [int(v) for v in self.landmarks],
@@ -93,7 +95,7 @@ class SymmetryScore:
             "upper_method": self.upper_method,
             "notes": list(self.notes),
             "seconds": self.seconds,
-        }
+        })
 
 
 def _exact_wanted(exact, n, m, n_landmarks) -> bool:
@@ -107,7 +109,7 @@ def _exact_wanted(exact, n, m, n_landmarks) -> bool:
 
 
 def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                   effort="default") -> SymmetryScore:
+                   effort="default", force=False, search=None) -> SymmetryScore:
     """Bracket of the global symmetry score σ(X) (Eq. 5) and of κ (Theorem 4.1).
 
     Parameters
@@ -121,12 +123,20 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
         above the LP's size limit (then ``sigma_upper = inf`` and a note).
     time_limit : seconds for each of the exact and LP solves (None: no limit).
     seed, effort : passed to ``witness_search``.
+    force : run the exact and LP solves even beyond their memory and size limits
+        (otherwise they are skipped with a note and the bracket keeps its bounds).
+    search : a ``witness_search`` result for the same D, N, landmarks and seed, to
+        reuse instead of searching again (``api.SymmetryProblem`` keeps them).
     """
     t0 = time.perf_counter()
     D, n, lm, _ = _prepare(D, n_samples, landmarks)
     m = D.shape[0]
     notes = []
-    res = witness_search(D, n, lm, seed=seed, effort=effort)
+    if search is None:
+        check_cost(f"the witness search at N = {n}, M = {m}", search_seconds(n, m), force=force)
+        res = witness_search(D, n, lm, seed=seed, effort=effort)
+    else:
+        res = search
     floor = best_single_swap(D, n, lm)[0]
     lower, witness = res.sigma, res.witness
     sigma_exact, hi, method = None, math.inf, "none"
@@ -135,8 +145,14 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
     elif _exact_wanted(exact, n, m, lm.size):
         from shapecond.symmetry.exact import exact_sigma
 
-        ex = exact_sigma(D, n, lm, time_limit=time_limit)
-        if ex.finished and ex.sigma is not None:
+        try:
+            ex = exact_sigma(D, n, lm, time_limit=time_limit, warm=res, force=force)
+        except TooLargeError as err:
+            ex = None
+            notes.append(f"exact σ not attempted: {err}")
+        if ex is None:
+            pass
+        elif ex.finished and ex.sigma is not None:
             if ex.sigma >= lower * (1 - 1e-9):
                 sigma_exact = ex.sigma
                 lower = hi = ex.sigma
@@ -151,7 +167,7 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
         from shapecond.symmetry.relax import lp_upper_bound
 
         try:
-            lp = lp_upper_bound(D, n, lm, time_limit=time_limit)
+            lp = lp_upper_bound(D, n, lm, time_limit=time_limit, force=force)
             hi, method = max(lp.upper, lower), "lp"
             if lp.upper == math.inf and lp.status.startswith("time"):
                 notes.append(f"LP upper bound did not finish within {time_limit} s")

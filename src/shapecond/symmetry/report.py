@@ -1,0 +1,94 @@
+"""The full answer to "how hard is this shape to match": the result of ``shapecond score``.
+
+``score_shape(shape, landmark_ids)`` runs the symmetry score of a
+``MetricShape`` (the σ bracket of paper Eq. 5, σ̂ = σ√N and the κ bracket of
+Theorem 4.1, ``score.symmetry_score``), the resolution report for dense targets
+(``resolution``) and the verdict in words (``verdict``), and returns a
+``ScoreResult`` whose ``to_dict()`` is the JSON object of ``shapecond score
+--json``.  Landmarks and the witness are given in the input's own ids.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from shapecond.jsonable import jsonable
+from shapecond.symmetry.resolution import ResolutionReport, resolution_for_shape
+from shapecond.symmetry.score import SymmetryScore, symmetry_score
+from shapecond.symmetry.verdict import verdict
+
+
+def _fmt(v: float) -> str:
+    return "inf" if math.isinf(v) else f"{v:.4g}"
+
+
+@dataclass(frozen=True, eq=False)
+class ScoreResult:
+    """σ bracket, κ bracket, witness (input ids), resolution report and verdict of one shape.
+
+    Attributes
+    ----------
+    score : SymmetryScore (sample indices; ``score.witness[i]`` is a point of Y).
+    shape : MetricShape the score was computed on.
+    resolution : ResolutionReport or None (only for dense targets on a mesh).
+    verdict : one line saying what the numbers mean for matching.
+    landmarks : the fixed landmarks, in the input's ids.
+    """
+
+    score: SymmetryScore
+    shape: object = field(repr=False)
+    resolution: ResolutionReport | None
+    verdict: str
+    landmarks: tuple = ()
+
+    @property
+    def sigma(self) -> tuple:
+        """(lower, upper) bracket of σ; ``math.inf`` for an exact symmetry."""
+        return self.score.sigma_lower, self.score.sigma_upper
+
+    @property
+    def kappa(self) -> tuple:
+        """(lower, upper) bracket of the condition number (Theorem 4.1)."""
+        return self.score.kappa_lower, self.score.kappa_upper
+
+    @property
+    def witness_ids(self) -> np.ndarray | None:
+        """Input id of the image of each sample under the witness (None for a matrix input: rows)."""
+        return self.shape.target_ids[self.score.witness]
+
+    def to_dict(self) -> dict:
+        """The JSON object of ``shapecond score --json`` (``inf`` as "inf")."""
+        out = self.score.to_dict()
+        out["landmarks"] = [int(v) for v in self.landmarks]
+        out["samples"] = [int(v) for v in self.shape.sample_ids]
+        out["target"] = self.shape.target
+        out["resolution"] = None if self.resolution is None else self.resolution.to_dict()
+        out["verdict"] = self.verdict
+        out["witness_vertices"] = None if self.shape.geometry is None else [int(v) for v in self.witness_ids]
+        return jsonable(out)
+
+    def __repr__(self) -> str:
+        lo, hi = self.sigma
+        return (f"ScoreResult(sigma=[{_fmt(lo)}, {_fmt(hi)}], kappa=[{_fmt(self.kappa[0])}, {_fmt(self.kappa[1])}], "
+                f"N={self.score.n_points}, M={self.score.n_targets}, verdict={self.verdict!r})")
+
+    def plot(self, fig=None, **kw):
+        """The witness map drawn on the shape, onto ``fig`` (or a new Figure); returns the Figure."""
+        from shapecond.viz.witness import render_witness_png
+
+        return render_witness_png(self.shape, self.score.witness, None, landmarks=tuple(self.score.landmarks),
+                                  fig=fig, **kw)
+
+
+def score_shape(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
+                effort="default", force=False) -> ScoreResult:
+    """Score a ``MetricShape`` whose samples include the landmarks ``landmark_ids`` (input ids)."""
+    lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
+    sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
+                        seed=seed, effort=effort, force=force)
+    res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
+    return ScoreResult(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius),
+                       tuple(int(v) for v in landmark_ids))
