@@ -5,7 +5,7 @@
 ``error:`` line on stderr, no traceback and no file written; ``api_cases(folder)``
 returns ``(class, callable)`` pairs that must raise one ``InputError``.  Kept
 apart from the test so that the same table can be run against any build
-(``python -m tests.cli.bad_inputs SHAPECOND_EXECUTABLE``) to count how many of
+(``python tests/cli/bad_inputs.py SHAPECOND_EXECUTABLE``) to count how many of
 its cases a build handles.
 """
 

@@ -11,8 +11,21 @@ import shutil
 import pytest
 
 from shapecond.errors import InputError
-from tests.cli.bad_inputs import api_cases, cli_cases
 from tests.conftest import run_cli
+
+
+def _table():
+    """The table module beside this file (imported by path: it is also a stand-alone tool)."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("bad_inputs", Path(__file__).with_name("bad_inputs.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+api_cases, cli_cases = _table().api_cases, _table().cli_cases
 
 def test_the_table_covers_every_class_and_command(tmp_path):
     CASES = cli_cases(tmp_path)

@@ -1,6 +1,6 @@
 """Deformation energy E(P) of a mesh matched to itself and its exact Hessian at P = 0.
 
-Paper Section 5 ("local symmetry score"); DESIGN.md sections 2.3 and 3.  A
+Paper Section 5 ("local symmetry score").  A
 deformation-based matcher moves every vertex ``x_i`` by ``p_i`` and minimises
 
     E(P) = sum_i a_i (n_i . p_i)^2 + alpha * E_stretch(P)

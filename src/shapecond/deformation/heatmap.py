@@ -1,7 +1,6 @@
 """Heat map of the local score with each vertex fixed, and greedy landmark selection.
 
-Paper Sections 5-6, DESIGN.md section 3; the local version of CNBS (issue 6,
-item 2).  For a candidate vertex ``v`` the exact quantity is ``lambda_min`` of
+Paper Sections 5-6; the local version of CNBS.  For a candidate vertex ``v`` the exact quantity is ``lambda_min`` of
 ``H v = lambda M v`` with the coordinates of ``v`` (and of the landmarks already
 chosen) removed: one eigen-solve per vertex, far too slow for every vertex of a
 mesh.

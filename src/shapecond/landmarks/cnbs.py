@@ -1,4 +1,4 @@
-"""Condition Number Based Sampling, global version (paper Section 6; DESIGN.md 3, "CNBS heat map").
+"""Condition Number Based Sampling, global version (paper Section 6).
 
 CNBS greedily adds the landmark that lowers the global symmetry score σ (paper Eq. 5)
 most.  The heat map of a step is σ with each candidate sample p fixed in addition to
@@ -6,7 +6,7 @@ the landmarks L so far (paper Figures 1 and 4); the next landmark is its argmin.
 scores after each landmark form the "vector of symmetry scores" of Section 6.
 
 σ is known only through a lower bound with a witness map (``witness_search``), so the
-heat map is a lower bound per candidate, assembled as in DESIGN.md 3:
+heat map is a lower bound per candidate, assembled in four steps:
 
 1. **Fixed by the witness.**  If the best witness map T of the previous step already
    fixes p (T(p) = p, e.g. p on the mirror plane of a mirror witness), T is feasible
@@ -21,7 +21,7 @@ heat map is a lower bound per candidate, assembled as in DESIGN.md 3:
 4. **Re-solves.**  The candidates the witness maps move farthest
    (max over maps of D[p, T(p)]) are where fixing p hurts the witness most and where
    the argmin lies; the ``resolve_fraction`` (default 20 %) of them with the largest
-   move are searched again; heat[p] is the max of all bounds.  DESIGN.md's prototype
+   move are searched again; heat[p] is the max of all bounds.  The first prototype
    re-solved them with a fresh multistart search; here a fresh ``witness_search``
    costs 8-18 s at N = 400 on the shared machine (its spectral and Gilmore-Lawler
    starts do not depend on p but are recomputed), so the default re-solve is an
@@ -65,7 +65,7 @@ from ..symmetry.objective import ISOMETRY_RTOL
 from .warm import WarmPolisher, _search_module
 
 #: Share of the candidates, those moved farthest by the witness maps, that get a
-#: full re-solve in every heat map (DESIGN.md 3: 20 % kept the argmin at N = 400).
+#: full re-solve in every heat map (20 % kept the argmin at N = 400 in the prototype).
 RESOLVE_FRACTION = 0.2
 #: Number of best distinct witness maps used as warm starts.
 N_MAPS = 4

@@ -96,7 +96,7 @@ def symmetry_score(D, n_samples, landmarks, seed=0, quick=False) -> float:
 
 
 def swap_floor(D, n_samples, landmarks) -> float:
-    """σ of the best single swap avoiding the landmarks (DESIGN.md 1, "Floor")."""
+    """σ of the best single swap avoiding the landmarks."""
     from shapecond.symmetry.search import best_single_swap
 
     return float(best_single_swap(D, n_samples, list(landmarks))[0])

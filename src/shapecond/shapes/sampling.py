@@ -1,10 +1,10 @@
-"""Farthest-point sampling (FPS) under a chosen metric (DESIGN.md section 1).
+"""Farthest-point sampling (FPS) under a chosen metric.
 
 As in the paper, the first sample is the vertex farthest from a seeded random
 vertex; each next sample is the vertex farthest from all samples so far.  User
 landmarks come first, in the order given.  With a symmetry map, every sample is
 added together with its mirror image so that the sample set is closed under the
-map (symmetry-consistent sampling, issue 4): the paper's bijection score is then
+map (symmetry-consistent sampling): the paper's bijection score is then
 ∞ for an exactly symmetric mesh.
 """
 

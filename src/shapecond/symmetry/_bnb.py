@@ -1,4 +1,4 @@
-"""Branch and bound for the exact global symmetry score (DESIGN.md section 3).
+"""Branch and bound for the exact global symmetry score.
 
 We maximise the ratio ``r(T) = d²(T) / Dist²(T)`` (σ² of Eq. 5) over injective
 maps ``T`` of the samples into the targets that fix every landmark and are not

@@ -1,8 +1,8 @@
-"""Exact global symmetry score σ(X) (paper Eq. 5, L² case; DESIGN.md section 3).
+"""Exact global symmetry score σ(X) (paper Eq. 5, L² case).
 
 σ(X) = sup_{T ≠ Id} sqrt(d²(T) / Dist²(T)) over injective maps ``T`` of the
 ``N`` samples into the ``M`` points of ``D`` (``M == N``: the paper's
-bijections; ``M > N``: the dense-target score of issue 4) that fix every
+bijections; ``M > N``: the dense-target score) that fix every
 landmark (T(l) = l).  ``σ = inf`` when a non-identity map is an isometry up to
 round-off (``objective.is_isometry``); the witness is then that map.
 

@@ -14,7 +14,7 @@ score); the formulas below are the same.
 Both sums run over ordered pairs (each unordered pair counts twice), as in
 ``‖D − P D Pᵀ‖²_F`` for a permutation matrix ``P``.
 
-Incremental form used by the search (DESIGN.md section 3).  Write
+Incremental form used by the search.  Write
 ``Dist² = C_X + C_T − 2 S`` with ``C_X = Σ D[x,x']²`` (fixed),
 ``C_T = Σ D[Tx,Tx']²`` and ``S = Σ D[x,x'] D[Tx,Tx']``, and keep
 

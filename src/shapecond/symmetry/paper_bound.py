@@ -9,7 +9,7 @@ so that for the indicator ``v`` of a map T, ``vᵀ A v = Dist²(T)`` and
 ``vᵀ B v = d²(T)``, and proposes ``σ <= 1/sqrt(λ_0)`` with ``λ_0`` the smallest
 generalised eigenvalue of ``A v = λ B v``.
 
-Why this is NOT a bound (DESIGN.md 2.1): ``A`` has a zero diagonal (``x = x'``
+Why this is NOT a bound: ``A`` has a zero diagonal (``x = x'``
 and ``y = y'`` give ``(0 − 0)²``) and non-negative off-diagonal entries, so its
 trace is 0 and, unless ``A = 0``, it has a negative eigenvalue.  ``B`` is
 singular on the identity assignments ``x -> x``; on the remaining assignments

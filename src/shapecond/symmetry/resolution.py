@@ -1,4 +1,4 @@
-"""Is the witness an isometry within sampling resolution? (issue 4, item 2)
+"""Is the witness an isometry within sampling resolution?
 
 With dense targets (a set Y of M points containing the N samples X as its
 FPS prefix) the score of an exact symmetry keeps growing as M grows: the

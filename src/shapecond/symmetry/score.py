@@ -1,7 +1,6 @@
 """The global symmetry score as a bracket, with its witness and the κ bracket.
 
-Assembles the three estimators of σ(X) (paper Eq. 5, L² case; DESIGN.md
-sections 1-3):
+Assembles the three estimators of σ(X) (paper Eq. 5, L² case):
 
 * **lower**: ``search.witness_search``, always run; a certified lower bound
   attained by the returned witness map, never below the best single swap;
@@ -10,9 +9,9 @@ sections 1-3):
   the exact maximiser;
 * **upper**: the exact value if known, else the LP relaxation
   (``relax.lp_upper_bound``) when asked for and within its size limit, else
-  ``inf`` (no cheap valid upper bound exists: DESIGN.md 2.1).
+  ``inf`` (no cheap valid upper bound exists: see ``paper_bound``).
 
-Also reported: the size-free score σ̂ = σ·√N (DESIGN.md 1) and the bracket of
+Also reported: the size-free score σ̂ = σ·√N and the bracket of
 the condition number σ_lower ≤ κ ≤ 2·σ_upper + 1 (Theorem 4.1).
 ``time_limit`` bounds each of the exact and LP solves; the search always runs
 its full ``effort`` so that the lower bound is deterministic given ``seed``.

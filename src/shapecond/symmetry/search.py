@@ -1,4 +1,4 @@
-"""Lower bound of the global symmetry score with a witness map (DESIGN.md section 3).
+"""Lower bound of the global symmetry score with a witness map.
 
 σ(X) = sup_{T ≠ Id} sqrt(d²(T) / Dist²(T)) (paper Eq. 5, L² case), the sup over
 maps fixing every landmark.  Any map T ≠ Id gives σ(X) ≥ σ_T, so the best map
@@ -98,8 +98,7 @@ def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
 
     For the swap (a b), d² = 2 D[a,b]² and Dist² = 4 Σ_{x ≠ a,b} (D[x,a] − D[x,b])²,
     all pairs at once from K = D_XX² (one O(N³) product, then O(N²)).  Every
-    metric space has σ ≥ 1/sqrt(2(N − 2)) from these maps (DESIGN.md 1,
-    "Floor"); a swap that is an isometry gives ``inf``.
+    metric space has σ ≥ 1/sqrt(2(N − 2)) from these maps; a swap that is an isometry gives ``inf``.
     """
     D, n, lm, free = _prepare(D, n_samples, landmarks)
     if free.size < 2:

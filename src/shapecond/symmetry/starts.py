@@ -1,4 +1,4 @@
-"""Start maps of the witness search (DESIGN.md section 3, "Starts that matter").
+"""Start maps of the witness search.
 
 All starts are bijections of the samples X (the first ``n`` points), built
 from ``DX = D[:n, :n]``; landmarks are fixed points.  The search refines them
@@ -224,7 +224,7 @@ def reflection_starts(D: np.ndarray, n: int, free: np.ndarray, landmarks: np.nda
 
     An intrinsic symmetry T commutes with D, so on the MDS coordinates Φ of X
     it acts (for simple eigenvalues) as a diagonal ±1 matrix S; a mirror
-    typically flips several coordinates, not one or two (DESIGN.md section 3:
+    typically flips several coordinates, not one or two (measured:
     on an animal the antisymmetric vector was only 6th by |λ|).  Every pattern
     S ≠ I over the first ``n_coords`` coordinates is scored by the ratio
 
