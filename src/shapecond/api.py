@@ -196,6 +196,14 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
                        seed=check_seed(shape_kw.get("seed", 0)), effort=effort, force=shape_kw.get("force", False))
 
 
+def require_mesh(g):
+    """``g`` if it is a triangle mesh; ``InputError`` for a point cloud or a distance matrix."""
+    if not isinstance(g, Geometry) or not g.is_mesh:
+        raise InputError("the local score needs a triangle mesh (a point cloud or distance matrix has "
+                         "no surface to deform)")
+    return g
+
+
 def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs", zero_tol: float | None = None,
                 force: bool = False):
     """Local symmetry score σ_∞ = sqrt(2/λ_min) of deformation-based matching (paper Section 5).
@@ -205,10 +213,7 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     """
     from .deformation.local_score import ZERO_TOL, local_score_of_geometry
 
-    g = load(x, force=force)
-    if not isinstance(g, Geometry) or not g.is_mesh:
-        raise InputError("the local score needs a triangle mesh (a point cloud or distance matrix has "
-                         "no surface to deform)")
+    g = require_mesh(load(x, force=force))
     return local_score_of_geometry(g, parse_ids(landmarks), alpha=alpha, energy=energy,
                                    zero_tol=ZERO_TOL if zero_tol is None else zero_tol)
 

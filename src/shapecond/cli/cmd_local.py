@@ -12,8 +12,7 @@ import click
 from ..deformation.energy import ALPHA_RANGE, DEFAULT_ALPHA, ENERGIES
 from ..deformation.heatmap import local_heatmap
 from ..deformation.local_score import ZERO_TOL, LocalProblem, LocalScore
-from ..errors import InputError
-from ..shapes.geometry import Geometry
+from ..api import require_mesh
 from ..shapes.io import load_input
 from .common import Float, emit_json, force_option, info, json_option, parse_ids
 
@@ -35,10 +34,7 @@ from .common import Float, emit_json, force_option, info, json_option, parse_ids
 def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, force, as_json):
     """Local symmetry score sqrt(2 / lambda_min) of the energy Hessian, with its zero modes."""
     t0 = time.perf_counter()
-    g = load_input(input_spec, force=force)
-    if not isinstance(g, Geometry) or not g.is_mesh:
-        raise InputError("the local score needs a triangle mesh (a point cloud or distance matrix has "
-                         "no surface to deform)")
+    g = require_mesh(load_input(input_spec, force=force))
     fixed = g.to_internal(parse_ids(landmarks))
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(fixed, zero_tol=zero_tol, ids=g.ids)

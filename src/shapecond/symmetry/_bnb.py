@@ -66,14 +66,8 @@ from . import objective
 
 
 def ratio_of(D: np.ndarray, t: np.ndarray) -> float:
-    """σ_T² of one map (``inf`` for an isometry, 0 for d² = 0)."""
-    num = objective.d2(D, t)
-    if num == 0.0:
-        return 0.0
-    den = objective.dist2(D, t)
-    if objective.is_isometry(D, den, t.size):
-        return math.inf
-    return num / den
+    """σ_T² of one map (``inf`` for an isometry, 0 for d² = 0): ``objective.map_score`` squared."""
+    return objective.map_score(D, t) ** 2
 
 
 def swap_search(D: np.ndarray, n: int, landmarks, rng: np.random.Generator, restarts: int = 4):
