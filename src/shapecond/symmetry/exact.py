@@ -32,7 +32,7 @@ import numpy as np
 
 from ..jsonable import jsonable
 from ..errors import TooLargeError
-from ..limits import MAX_BYTES, human_bytes, one_blas_thread
+from ..limits import human_bytes, one_blas_thread
 from . import objective
 from ._bnb import branch_and_bound, ratio_of, swap_search
 from .objective import check_instance
@@ -125,23 +125,31 @@ def _enumerate(D, n, L):
     return best_r, best_t, maps.shape[0]
 
 
+#: Branch and bound needing more memory than this is refused unless forced: it only
+#: finishes for N up to about 20, where it needs a few MB.
+BNB_MAX_BYTES = 2**30
+
+
 def bnb_bytes(n: int, m: int, n_landmarks: int) -> float:
     """Memory of the branch and bound's per-depth cross terms C1: 8 (free + 1) N M bytes."""
     return 8.0 * (n - n_landmarks + 1) * n * m
 
 
 def _warm_start(D, n, L, warm=None):
-    """Best of our swap ascent and a witness (``warm``, or a quick ``search.witness_search``).
+    """A good map to start the tree search from: ``warm``'s witness when given (the caller's
+    search already ran, so nothing is recomputed before the time limit starts to count), else
+    the best of our swap ascent and a quick ``search.witness_search``.
 
     Only speeds the tree search up: its result never depends on the warm start.
     """
-    best = swap_search(D, n, L, np.random.default_rng(0))
     if warm is not None:
-        res = warm
-    else:
-        from .search import witness_search
+        w = np.asarray(warm.witness, dtype=np.int64)
+        if w.shape == (n,) and np.unique(w).size == n and all(w[l] == l for l in L):
+            return ratio_of(D, w), w
+    from .search import witness_search
 
-        res = witness_search(D, n_samples=n, landmarks=L, seed=0, effort="quick")
+    best = swap_search(D, n, L, np.random.default_rng(0))
+    res = witness_search(D, n_samples=n, landmarks=L, seed=0, effort="quick")
     w = np.asarray(res.witness, dtype=np.int64)
     valid = w.shape == (n,) and np.unique(w).size == n and all(w[l] == l for l in L)
     if valid:
@@ -171,7 +179,7 @@ def exact_sigma(D, n_samples=None, landmarks=(), time_limit=None, warm=None, for
         search from; without it a quick witness search is run first.
     force : bool
         Run branch and bound even when its memory (``bnb_bytes``) exceeds
-        ``shapecond.limits.MAX_BYTES``, or without a time limit beyond 16 free samples.
+        ``BNB_MAX_BYTES``, or without a time limit beyond 16 free samples.
 
     Returns
     -------
@@ -197,9 +205,10 @@ def exact_sigma(D, n_samples=None, landmarks=(), time_limit=None, warm=None, for
         finished = True
     else:
         need = bnb_bytes(n, M, len(L))
-        if not force and need > MAX_BYTES:
+        if not force and need > BNB_MAX_BYTES:
             raise TooLargeError(f"branch and bound at N = {n}, M = {M} needs {human_bytes(need)} "
-                                f"(limit {human_bytes(MAX_BYTES)}); use --force")
+                                f"(limit {human_bytes(BNB_MAX_BYTES)}) and cannot finish at this size; "
+                                "use --force")
         if not force and time_limit is None and n - len(L) > 16:
             raise TooLargeError(f"branch and bound for {n - len(L)} free samples has no time bound; give a time limit "
                                 "or use --force")
