@@ -13,15 +13,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-try:  # a dependency; guarded so that a platform without its wheel can still fall back
-    from cholespy import CholeskySolverD as _Cholesky, MatrixType as _MatrixType
-except ImportError:  # pragma: no cover
-    _Cholesky = _MatrixType = None
-
-
-def available() -> bool:
-    """Whether cholespy can be imported."""
-    return _Cholesky is not None
+from cholespy import CholeskySolverD as _Cholesky, MatrixType as _MatrixType
 
 
 class NotPositiveDefinite(ValueError):
@@ -37,13 +29,10 @@ class SparseCholesky:
 
     Raises
     ------
-    ImportError when cholespy is missing; ``NotPositiveDefinite`` when the
-    factorisation fails.
+    ``NotPositiveDefinite`` when the factorisation fails.
     """
 
     def __init__(self, A: sp.spmatrix):
-        if _Cholesky is None:  # pragma: no cover
-            raise ImportError("cholespy is not installed")
         L = sp.tril(A, format="csc")
         self.n = int(A.shape[0])
         try:

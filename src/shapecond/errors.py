@@ -1,9 +1,10 @@
 """Error types shared by the library and the command line.
 
 ``InputError`` is raised for anything wrong with what the user gave us (a
-broken mesh, landmarks out of range, a non-square distance matrix...).  The
-command line turns it into one ``error: ...`` line on stderr and exit status 2.
-Any other exception is an internal failure (exit status 1).
+broken mesh, landmarks out of range, a non-square distance matrix, an option
+out of range...).  The command line turns it into one ``error: ...`` line on
+stderr and exit status 2.  Any other exception is an internal failure (exit
+status 1).
 """
 
 
@@ -16,4 +17,12 @@ class InputError(ShapecondError, ValueError):
 
 
 class TooLargeError(InputError):
-    """A computation was refused because it would exceed a measured size limit."""
+    """A computation was refused because its estimated time or memory exceeds a limit.
+
+    The message gives the estimate and the option (``--force``, or ``force=True``)
+    that runs it anyway.
+    """
+
+
+class OutputError(InputError):
+    """An output file cannot be written (full disk, no permission, a folder in the way)."""

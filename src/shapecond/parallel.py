@@ -202,17 +202,30 @@ def _thread_env(n_jobs: int) -> dict:
     return {name: share for name in _THREAD_VARIABLES}
 
 
+def _in_worker(parent_pid, f, args, kwargs):
+    """Run one task in a pool worker that ends with the command, even on SIGKILL."""
+    from shapecond.limits import die_with_parent
+
+    die_with_parent(parent_pid)
+    return f(*args, **kwargs)
+
+
 def _iter_loky(tasks, n_jobs):
-    """Tasks on joblib's loky pool, at most ``n_jobs`` in flight; suspects of a crash retried alone."""
+    """Tasks on joblib's loky pool, at most ``n_jobs`` in flight (no more workers than tasks
+    and cores: ``limits.cap_jobs``); suspects of a crash retried alone."""
     from joblib.externals.loky import get_reusable_executor
     from joblib.externals.loky.process_executor import BrokenProcessPool
 
+    from shapecond.limits import cap_jobs
+
+    n_jobs = cap_jobs(n_jobs, len(tasks))
     queue, suspects, running = deque(range(len(tasks))), deque(), {}
+    parent = os.getpid()
 
     def submit(i, alone):
         f, a, k = tasks[i]
         ex = get_reusable_executor(max_workers=n_jobs, env=_thread_env(n_jobs))
-        running[ex.submit(f, *a, **k)] = (i, alone)
+        running[ex.submit(_in_worker, parent, f, a, k)] = (i, alone)
 
     while queue or suspects or running:
         if suspects and not running:

@@ -114,8 +114,8 @@ def test_bad_inputs_become_error_rows_and_exit_3(broken_dir, tmp_path, capsys):
     rows = {Path(r["file"]).name: r for r in read_table(out)}
     assert summary["shapes"] == len(rows) == 8 and summary["failed"] == 7
     assert rows["good.off"]["error"] is None and rows["good.off"]["sigma_lower"] > 0
-    for name, pattern in {"empty.off": "empty", "garbage.off": "not a readable mesh",
-                          "binary.ply": "not a readable mesh", "wrong_shape.npy": r"\(4, 5\)",
+    for name, pattern in {"empty.off": "empty", "garbage.off": "not an OFF file",
+                          "binary.ply": "binary.ply: ", "wrong_shape.npy": r"\(4, 5\)",
                           "nan.off": "NaN", "two_parts.off": "2 connected components",
                           "dangling.off": "no such file on worker"}.items():
         assert re.search(pattern, rows[name]["error"]), (name, rows[name]["error"])

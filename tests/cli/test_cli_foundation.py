@@ -40,7 +40,7 @@ def test_sample_writes_npz_with_file_ids(tmp_path, capsys):
     (["sample", "demo:sphere", "--points", "5000", "-o", "OUT"], "fewer than"),
     (["sample", "demo:sphere", "--points", "10", "--landmarks", "999999", "-o", "OUT"], "not a vertex"),
     (["sample", "demo:sphere", "--points", "10", "--landmarks", "4,4", "-o", "OUT"], "repeated"),
-    (["sample", "demo:sphere", "--points", "2", "-o", "OUT"], "at least 3"),
+    (["sample", "demo:sphere", "--points", "2", "-o", "OUT"], "--points must be an integer in [3,"),
     (["sample", "demo:nosuchshape", "-o", "OUT"], "unknown generated shape"),
     (["sample", "demo:sphere", "--bogus", "-o", "OUT"], "No such option"),
     (["info", "missing.off"], "no such file"),

@@ -157,11 +157,14 @@ def test_time_limit_returns_a_valid_witness():
 @pytest.mark.parametrize("kwargs, message", [
     (dict(D=np.zeros((3, 4))), "square"),
     (dict(D=np.full((4, 4), np.nan)), "NaN"),
-    (dict(D=np.ones((4, 4)), landmarks=(0, 0)), "repeat"),
-    (dict(D=np.ones((4, 4)), landmarks=(7,)), "out of range"),
-    (dict(D=np.ones((4, 4)), landmarks=(0, 1, 2)), "free"),
-    (dict(D=np.ones((4, 4)), n_samples=1), "samples"),
-    (dict(D=np.ones((4, 4)), effort="huge"), "effort"),
+    (dict(D=np.ones((4, 4)) - np.eye(4), landmarks=(0, 0)), "repeat"),
+    (dict(D=np.ones((4, 4)) - np.eye(4), landmarks=(7,)), "not a sample index"),
+    (dict(D=np.ones((4, 4)) - np.eye(4), landmarks=(0, 1, 2)), "free"),
+    (dict(D=np.ones((4, 4)) - np.eye(4), n_samples=1), "samples"),
+    (dict(D=np.ones((4, 4)) - np.eye(4), effort="huge"), "effort"),
+    (dict(D=np.ones((4, 4))), "diagonal"),
+    (dict(D=np.array([[0, 1, 2.0], [1, 0, 1], [1, 1, 0]])), "symmetric"),
+    (dict(D=np.array([[0, -1, 2.0], [-1, 0, 1], [2, 1, 0]])), "negative"),
 ])
 def test_bad_input_raises_input_error(kwargs, message):
     with pytest.raises(InputError, match=message):

@@ -27,9 +27,9 @@ from .inputs import content_hash
 #: The options of ``shapecond score`` a batch takes, with the command line's defaults.
 DEFAULT_OPTIONS = {"points": None, "metric": "geodesic", "geodesic_backend": "heat", "seed": 0,
                    "largest_component": False, "no_cache": False, "target": None, "target_factor": 8,
-                   "symmetry_map": None, "effort": "default", "what": ["score"]}
-#: Options that shape the results (``no_cache`` does not).
-KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k != "no_cache")
+                   "symmetry_map": None, "effort": "default", "what": ["score"], "force": False}
+#: Options that shape the results (``no_cache`` and ``force`` do not).
+KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k not in ("no_cache", "force"))
 
 
 @dataclass(frozen=True)
@@ -139,15 +139,17 @@ def _fill(row: dict, spec: str, options: dict) -> None:
     from ..shapes.io import describe_input
 
     what = parse_what(options.get("what") or ["score"])
-    info = describe_input(spec)
+    force = bool(options.get("force", False))
+    info = describe_input(spec, force)
     row.update(kind=info["kind"], vertices=info["n_vertices"], faces=info["n_faces"],
                components=info["components"], problems="; ".join(info["problems"]) or None)
-    loaded = load_geometry_or_matrix(spec, options.get("largest_component", False), options.get("symmetry_map"))
+    loaded = load_geometry_or_matrix(spec, options.get("largest_component", False), options.get("symmetry_map"),
+                                     force)
     seed, effort = options.get("seed", 0), options.get("effort", "default")
     shape = None
     if what.score or what.landmarks:
         shape_kw = {k: options.get(k) for k in ("points", "metric", "geodesic_backend", "seed", "largest_component",
-                                                "no_cache", "target", "target_factor", "symmetry_map")
+                                                "no_cache", "target", "target_factor", "symmetry_map", "force")
                     if options.get(k) is not None}
         shape = build_shape(spec, loaded=loaded, progress=False, **shape_kw)
         row.update(n_points=shape.n_points, n_targets=shape.n_targets, covering_radius=shape.covering_radius)
@@ -167,9 +169,10 @@ def _fill(row: dict, spec: str, options: dict) -> None:
 def _score_columns(row: dict, shape, seed: int, effort: str) -> None:
     """The global score's columns, from the report ``shapecond score --json`` prints."""
     from ..symmetry import objective
-    from ..symmetry.report import score_report
+    from ..symmetry.report import score_shape as score_metric_shape
 
-    report, sc = score_report(shape, (), seed=seed, effort=effort)
+    result = score_metric_shape(shape, (), seed=seed, effort=effort)
+    report, sc = result.to_dict(), result.score
     n = sc.n_points
     moved = np.asarray(sc.witness) != np.arange(n)
     row.update(sigma_lower=sc.sigma_lower, sigma_upper=sc.sigma_upper, sigma_hat=sc.sigma_hat_lower,

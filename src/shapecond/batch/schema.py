@@ -4,7 +4,7 @@ Every output format holds the same columns in the same order (Parquet types
 below; CSV and JSON Lines write lists as JSON arrays, a missing value as an
 empty cell / ``null``, and an infinite score as ``inf`` / ``"inf"``).  Values
 come from the code paths of the single-shape commands: ``info``
-(``shapes.io.describe_input``), ``score`` (``symmetry.report.score_report``),
+(``shapes.io.describe_input``), ``score`` (``symmetry.report.score_shape``),
 ``local`` (``deformation.local_score_of_geometry``) and ``landmarks``
 (``landmarks.select_landmarks``).  A row is identified by its file, the file's
 content hash and the parameters (``KEY``): ``--resume`` skips a shape whose
@@ -67,7 +67,7 @@ COLUMNS = (
     Column("worker", "string", "host:pid of the process that computed the row"),
     Column("error", "string", "one-line message when the shape failed (empty otherwise)"),
 )
-# The scale-aware score δ(ε) of score_report's "scale" entry (shapecond.symmetry.scale).
+# The scale-aware score δ(ε) of the score report's "scale" entry (shapecond.symmetry.scale).
 SCALE_AWARE_COLUMNS: tuple = (
     Column("delta", "float64", "scale-aware score δ(ε): RMS displacement of the widest self-map whose "
                                "RMS distortion (and every landmark row's) stays within ε, in diameters"),

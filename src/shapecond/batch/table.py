@@ -135,7 +135,7 @@ class _LineFile:
 
 
 def _json_line(row: dict) -> str:
-    from ..cli.common import jsonable
+    from ..jsonable import jsonable
 
     return json.dumps(jsonable({k: row.get(k) for k in schema.NAMES}), allow_nan=False) + "\n"
 
@@ -247,13 +247,13 @@ class Table:
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        from ..shapes.io import atomic_write
+        from ..output import atomic_open
 
         t0 = time.monotonic()
         table = pa.Table.from_pylist([{k: r.get(k) for k in schema.NAMES} for r in self.rows],
                                      schema=schema.arrow_schema())
-        with atomic_write(self.path) as tmp:
-            pq.write_table(table, tmp)
+        with atomic_open(self.path, "wb") as fh:
+            pq.write_table(table, fh)
         if self.lines.fd is not None:
             self.lines.clear()
         self._last_snapshot = time.monotonic()

@@ -13,6 +13,7 @@ import importlib
 import os
 import pkgutil
 import sys
+import warnings
 
 import click
 
@@ -47,8 +48,15 @@ def _fail(message: str, status: int) -> None:
     sys.exit(status)
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings (cache skipped, long run ahead, ...) as one ``warning: ...`` line on stderr."""
+    text = str(message).splitlines()[0] if str(message) else category.__name__
+    print(f"warning: {text}", file=sys.stderr)
+
+
 def main(argv=None) -> None:
     """Console-script entry point."""
+    warnings.showwarning = _one_line_warning
     try:
         status = cli.main(args=argv, prog_name="shapecond", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as exc:  # bare `shapecond` or `shapecond CMD`: show help

@@ -19,8 +19,9 @@ import numpy as np
 
 from ..errors import InputError
 from ..shapes.metric import metric_shape
-from ..shapes.synthetic import animal
-from .common import emit_json, fmt, info, json_option, progress_enabled
+from ..shapes.synthetic import generate
+from ..symmetry.verdict import verdict
+from .common import SEED, Float, Int, emit_json, fmt, force_option, info, json_option, progress_enabled
 
 
 def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
@@ -41,28 +42,28 @@ def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
 
 
 @click.command("demo")
-@click.option("--points", "-n", type=int, default=400, show_default=True, help="Number of samples N.")
-@click.option("--landmark-points", type=int, default=100, show_default=True,
+@click.option("--points", "-n", type=Int(3, 5000), default=400, show_default=True, help="Number of samples N.")
+@click.option("--landmark-points", type=Int(3, 5000), default=100, show_default=True,
               help="Samples used by CNBS (the first ones of the same sampling).")
-@click.option("--delta", type=float, default=0.0, show_default=True,
+@click.option("--delta", type=Float(-0.5, 1.0), default=0.0, show_default=True,
               help="Asymmetry of the generated animal (0 = exactly mirror-symmetric).")
 @click.option("--out", type=click.Path(file_okay=False), default="shapecond-demo", show_default=True,
               help="Folder for the pictures.")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
+@force_option
 @json_option
-def command(points, landmark_points, delta, out, seed, as_json):
+def command(points, landmark_points, delta, out, seed, force, as_json):
     """Score the generated animal, show its witness map, and pick three CNBS landmarks."""
     from ..landmarks import select_landmarks
     from ..symmetry.score import symmetry_score
 
-    if not 3 <= landmark_points <= points:
+    if not landmark_points <= points:
         raise InputError("--landmark-points must lie between 3 and --points")
     t0 = time.perf_counter()
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    geometry = animal(delta=delta)
-    shape = metric_shape(geometry, n_points=points, seed=seed, progress=progress_enabled())
-    score = symmetry_score(shape.D, seed=seed)
+    geometry = generate("animal", delta=delta)
+    shape = metric_shape(geometry, n_points=points, seed=seed, progress=progress_enabled(), force=force)
+    score = symmetry_score(shape.D, seed=seed, force=force)
     inverse = {int(v): k for k, v in enumerate(shape.samples)}
     mirror = np.array([inverse.get(int(geometry.symmetry[v]), -1) for v in shape.samples])
     small = metric_shape(geometry, n_points=landmark_points, seed=seed)
@@ -81,6 +82,7 @@ def command(points, landmark_points, delta, out, seed, as_json):
         "sigma_hat": score.to_dict()["sigma_hat"],
         "kappa": score.to_dict()["kappa"],
         "witness_is_mirror_map": bool(np.array_equal(score.witness, mirror)),
+        "verdict": verdict(score, shape.D, None, shape.covering_radius),
         "landmark_points": small.n_points,
         "landmarks": [int(v) for v in chosen.landmarks],
         "scores": list(chosen.scores),
@@ -98,9 +100,10 @@ def command(points, landmark_points, delta, out, seed, as_json):
     click.echo(f"sigma        [{fmt(sig['lower'])}, {fmt(sig['upper'])}]   kappa in "
                f"[{fmt(summary['kappa']['lower'])}, {fmt(summary['kappa']['upper'])}]")
     what = "the mirror map" if summary["witness_is_mirror_map"] else "a non-mirror map"
-    verdict = "an exact symmetry: matching cannot tell left from right" if math.isinf(sig["lower"]) else \
+    ambiguity = "an exact symmetry: matching cannot tell left from right" if math.isinf(score.sigma_lower) else \
         "a near-isometry that makes matching ambiguous"
-    click.echo(f"witness      {what}: {verdict}")
+    click.echo(f"witness      {what}: {ambiguity}")
+    click.echo(f"verdict      {summary['verdict']}")
     steps = ", ".join(f"{v} (sigma {fmt(s)})" for v, s in zip(summary["landmarks"], summary["scores"]))
     click.echo(f"CNBS         N = {small.n_points}, sigma {fmt(heat.sigma_before)} before; landmarks: {steps}")
     click.echo(f"pictures     {', '.join(pictures.values())}")

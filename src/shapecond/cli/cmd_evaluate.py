@@ -23,7 +23,7 @@ from ..matching.evaluation import PROTOCOLS, evaluate_dataset
 from ..matching.pipeline import MATCHERS
 from ..matching.report import by_protocol, correlations, protocols, write_report
 from ..parallel import runner
-from .common import emit_json, info, json_option, progress_enabled
+from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_option, progress_enabled
 
 DEFAULT_METHODS = "fps,pls,hks,cnbs,cnbs-scale"
 
@@ -45,16 +45,16 @@ def _names(text, allowed=None, what="name"):
 @click.option("--methods", default=DEFAULT_METHODS, show_default=True,
               help="Landmark methods (shapecond.landmarks).")
 @click.option("--matchers", default="lh05,faq", show_default=True, help="Matchers: lh05, faq.")
-@click.option("--jobs", "-j", type=int, default=1, show_default=True,
-              help="Parallel processes for the per-shape work (joblib).")
+@click.option("--jobs", "-j", type=Int(1, 1024), default=1, show_default=True,
+              help="Parallel processes for the per-shape work (joblib; at most one per task and core).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="evaluation",
               show_default=True, help="Folder for report.md, results.json and the PNG plots.")
 @click.option("--quick", is_flag=True,
               help="A small run: wolf and centaur (or the first two classes), 2 targets each, N = 200.")
-@click.option("--points", "-n", type=int, default=None,
+@click.option("--points", "-n", type=Int(3, MAX_POINTS), default=None,
               help="Samples per shape [default: 400, or 200 with --quick].")
-@click.option("--max-targets", type=int, default=None, help="Match at most this many shapes per class.")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--max-targets", type=Int(1), default=None, help="Match at most this many shapes per class.")
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
               show_default=True)
 @click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
@@ -65,12 +65,11 @@ def _names(text, allowed=None, what="name"):
 @click.option("--scheduler", default=None,
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
                    "LocalCluster with W workers.")
+@force_option
 @json_option
 def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, points, max_targets,
-            seed, geodesic_backend, no_cache, protocol, scheduler, as_json):
+            seed, geodesic_backend, no_cache, protocol, scheduler, force, as_json):
     """Landmarks on each null shape, matched to the rest of its class; a Markdown report."""
-    if jobs < 1:
-        raise InputError("--jobs must be at least 1")
     t0 = time.perf_counter()
     with runner(jobs, scheduler) as run:  # one cluster for every stage of the evaluation
         ev = evaluate_dataset(Path(dataset_dir), classes=_names(classes, what="class") or None,
@@ -78,7 +77,8 @@ def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, point
                               matchers=_names(matchers, MATCHERS, "matcher"), n_jobs=jobs,
                               scheduler=run.client, quick=quick, n_points=points, seed=seed,
                               backend=geodesic_backend, cache=not no_cache,
-                              progress=progress_enabled(), max_targets=max_targets, protocol=protocol)
+                              progress=progress_enabled(), max_targets=max_targets, protocol=protocol,
+                              force=force)
     report = write_report(ev, out_dir)
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),

@@ -10,7 +10,8 @@ import numpy as np
 
 from ..landmarks.cnbs import RESOLVE_FRACTION, heat_map
 from .cmd_landmarks import guess_up
-from .common import (build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
+from ..limits import check_cost, search_seconds
+from .common import (Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
                      pop_shape_options, shape_options)
 
 
@@ -22,7 +23,7 @@ from .common import (build_shape, emit_json, fmt, info, json_option, load_geomet
 @click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh coloured by the heat map (PLY).")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Effort of the witness searches.")
-@click.option("--resolve-fraction", type=float, default=RESOLVE_FRACTION, show_default=True,
+@click.option("--resolve-fraction", type=Float(0.0, 1.0), default=RESOLVE_FRACTION, show_default=True,
               help="Share of candidates (those the witness maps move farthest) searched again.")
 @click.option("--score", "score", type=click.Choice(["sigma", "scale"]), default="sigma", show_default=True,
               help="sigma: the paper's σ with each point fixed; scale: the scale-aware δ(ε) "
@@ -43,8 +44,10 @@ def command(input_spec, landmarks, png, ply, effort, resolve_fraction, score, ep
     shape_kw = pop_shape_options(kwargs)
     ids = parse_ids(landmarks)
     loaded = load_geometry_or_matrix(input_spec, shape_kw.get("largest_component", False),
-                                     shape_kw.get("symmetry_map"))
+                                     shape_kw.get("symmetry_map"), shape_kw.get("force", False))
     shape = build_shape(input_spec, landmarks=ids, loaded=loaded, **shape_kw)
+    check_cost(f"the heat map at N = {shape.n_samples}",  # about 4 searches' worth (measured on TOSCA)
+               search_seconds(shape.n_samples, shape.n_targets, 4), force=shape_kw.get("force", False))
     L = list(range(len(ids)))  # build_shape puts the landmarks first
     n = shape.n_samples
     budget, unit, name = None, 1.0, "sigma"

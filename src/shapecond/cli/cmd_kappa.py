@@ -12,7 +12,8 @@ import click
 
 from ..errors import InputError
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
-from .common import build_shape, emit_json, fmt, info, json_option, parse_ids, pop_shape_options, shape_options
+from .common import (Float, Int, build_shape, emit_json, fmt, info, json_option, parse_ids, pop_shape_options,
+                     progress_enabled, shape_options)
 
 #: Samples taken from a mesh when --points is not given.
 DEFAULT_KAPPA_POINTS = 8
@@ -22,11 +23,13 @@ DEFAULT_KAPPA_POINTS = 8
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Vertex ids (row indices for a matrix) fixed by every map.")
-@click.option("--trials", type=int, default=20, show_default=True, help="Number of perturbed copies probed.")
-@click.option("--scale", type=float, default=0.05, show_default=True,
+@click.option("--trials", type=Int(1), default=20, show_default=True, help="Number of perturbed copies probed.")
+@click.option("--scale", type=Float(0.0, 10.0, lo_open=True), default=0.05, show_default=True,
               help="Random perturbation size, relative to the RMS distance.")
+@click.option("--time-limit", type=Float(0.0, lo_open=True), default=None,
+              help="Stop probing after this many seconds (the probes so far are reported).")
 @json_option
-def command(input_spec, landmarks, trials, scale, as_json, **kwargs):
+def command(input_spec, landmarks, trials, scale, time_limit, as_json, **kwargs):
     """Probe κ (Eq. 4) with exact matchings of perturbed copies; report σ <= κ <= 2σ + 1.
 
     For meshes N defaults to 8 samples; at most 9 samples may be free of landmarks.
@@ -35,10 +38,6 @@ def command(input_spec, landmarks, trials, scale, as_json, **kwargs):
     if shape_kw.get("target") == "dense":
         raise InputError("kappa probes match samples to samples; --target dense does not apply")
     shape_kw["target"] = "samples"
-    if trials < 1:
-        raise InputError(f"--trials must be at least 1, got {trials}")
-    if not scale > 0:
-        raise InputError(f"--scale must be positive, got {scale}")
     ids = parse_ids(landmarks)
     points = shape_kw.get("points")
     limit = MAX_PROBE_POINTS + len(ids)
@@ -53,7 +52,18 @@ def command(input_spec, landmarks, trials, scale, as_json, **kwargs):
         raise InputError(f"kappa probes enumerate every map: at most {limit} points with "
                          f"{len(ids)} landmarks, the input has {shape.n_points}")
     L = list(range(len(ids)))  # build_shape puts the landmarks first
-    res = kappa_probes(shape.D, trials=trials, seed=shape_kw.get("seed", 0), landmarks=L, scale=scale)
+    bar = None
+    if progress_enabled():
+        from tqdm import tqdm
+
+        bar = tqdm(total=trials, desc="probes", unit="probe", leave=False)
+    try:
+        res = kappa_probes(shape.D, trials=trials, seed=shape_kw.get("seed", 0), landmarks=L, scale=scale,
+                           time_limit=time_limit, force=shape_kw.get("force", False),
+                           progress=None if bar is None else lambda done, total: bar.update(1))
+    finally:
+        if bar is not None:
+            bar.close()
     lo, hi = res.kappa
     out = {
         "n_points": shape.n_points,
@@ -66,6 +76,7 @@ def command(input_spec, landmarks, trials, scale, as_json, **kwargs):
         "sigma": res.sigma,
         "witness": res.witness,
         "kappa": {"lower": lo, "upper": hi},
+        "notes": list(res.notes),
         "seconds": res.seconds,
     }
     if as_json:
@@ -75,4 +86,6 @@ def command(input_spec, landmarks, trials, scale, as_json, **kwargs):
     click.echo(f"sigma (exact)      {fmt(res.sigma)}")
     click.echo(f"kappa bracket      [{fmt(lo)}, {fmt(hi)}]   (Theorem 4.1: sigma <= kappa <= 2 sigma + 1)")
     click.echo(f"probes             {len(res.ratios)}, max {fmt(res.kappa_probe_max)}")
+    for note in res.notes:
+        info(f"note: {note}")
     info(f"{res.seconds:.2f} s")

@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from ..landmarks import METHODS, SCORES, select_landmarks
-from .common import (build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
+from ..limits import check_cost, search_seconds
+from .common import (Int, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
                      pop_shape_options, progress_enabled, shape_options)
 
 
@@ -20,7 +21,7 @@ def draw_landmarks(shape, result, png, ply, up, title):
     """Landmark pictures (Figure 6 colours) as PNG and/or PLY; matrices are drawn by MDS."""
     from ..viz.ply import write_ply
     from ..viz.render import render_png
-    from ..viz.witness import classical_mds
+    from ..symmetry.starts import classical_mds
 
     if shape.geometry is not None:
         V, F, verts = shape.geometry.vertices, shape.geometry.faces, list(result.vertices)
@@ -38,7 +39,7 @@ def draw_landmarks(shape, result, png, ply, up, title):
 @click.command("landmarks")
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
-@click.option("-k", "k", type=int, required=True, help="Number of landmarks (method user: 0 = all given).")
+@click.option("-k", "k", type=Int(0, 100_000), required=True, help="Number of landmarks (method user: 0 = all given).")
 @click.option("--method", type=click.Choice(METHODS), default="cnbs", show_default=True,
               help="cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the "
                    "scale-aware score δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel "
@@ -67,13 +68,17 @@ def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilo
     landmarks fixed: the paper's "vector of symmetry scores".
     """
     shape_kw = pop_shape_options(kwargs)
-    user_ids = parse_ids(user_landmarks) if user_landmarks else []
+    user_ids = parse_ids(user_landmarks, "--user-landmarks") if user_landmarks else []
     if method == "user" and not user_ids:
         raise click.UsageError("--method user needs --user-landmarks")
     loaded = load_geometry_or_matrix(input_spec, shape_kw.get("largest_component", False),
-                                     shape_kw.get("symmetry_map"))
+                                     shape_kw.get("symmetry_map"), shape_kw.get("force", False))
     shape = build_shape(input_spec, landmarks=user_ids, loaded=loaded, **shape_kw)
     seed = shape_kw.get("seed", 0)
+    if method == "cnbs" or scores:  # CNBS: about 4 searches' worth per landmark (measured on TOSCA)
+        check_cost(f"{method} with {k} landmarks at N = {shape.n_samples}",
+                   search_seconds(shape.n_samples, shape.n_targets, (4 if method == "cnbs" else 1) * max(k, 1)),
+                   force=shape_kw.get("force", False))
     kw = {}
     if method == "user":
         kw["ids"] = user_ids

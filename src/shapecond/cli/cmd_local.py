@@ -1,6 +1,6 @@
 """``shapecond local INPUT``: local symmetry score sigma_inf for deformation-based matching.
 
-Paper Section 5; ``shapecond.deformation`` (DESIGN.md sections 2.3 and 3).
+Paper Section 5; ``shapecond.deformation``.
 """
 
 from __future__ import annotations
@@ -9,35 +9,32 @@ import time
 
 import click
 
-from ..deformation.energy import DEFAULT_ALPHA, ENERGIES
+from ..deformation.energy import ALPHA_RANGE, DEFAULT_ALPHA, ENERGIES
 from ..deformation.heatmap import local_heatmap
 from ..deformation.local_score import ZERO_TOL, LocalProblem, LocalScore
-from ..errors import InputError
-from ..shapes.geometry import Geometry
+from ..api import require_mesh
 from ..shapes.io import load_input
-from .common import emit_json, info, json_option, parse_ids
+from .common import Float, emit_json, force_option, info, json_option, parse_ids
 
 
 @click.command("local")
 @click.argument("input_spec", metavar="INPUT")
 @click.option("--landmarks", "-l", default=None,
               help="Vertex ids (the file's own) to fix, e.g. 12,405,877, or a file of ids.")
-@click.option("--alpha", type=float, default=DEFAULT_ALPHA, show_default=True,
+@click.option("--alpha", type=Float(*ALPHA_RANGE), default=DEFAULT_ALPHA, show_default=True,
               help="Weight of the stretching term against point-to-plane proximity (unit-area mesh).")
 @click.option("--energy", type=click.Choice(ENERGIES), default="springs", show_default=True,
               help="Stretching term: edge springs or as-rigid-as-possible.")
-@click.option("--zero-tol", type=float, default=ZERO_TOL, show_default=True,
+@click.option("--zero-tol", type=Float(0.0, 1.0, lo_open=True, hi_open=True), default=ZERO_TOL, show_default=True,
               help="Eigenvalues below zero_tol x 2 count as zero modes (score inf).")
 @click.option("--heatmap-png", type=click.Path(dir_okay=False), default=None,
               help="Also draw the local score with each vertex fixed (modal approximation) to this PNG.")
+@force_option
 @json_option
-def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, as_json):
+def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, force, as_json):
     """Local symmetry score sqrt(2 / lambda_min) of the energy Hessian, with its zero modes."""
     t0 = time.perf_counter()
-    g = load_input(input_spec)
-    if not isinstance(g, Geometry) or not g.is_mesh:
-        raise InputError("the local score needs a triangle mesh (a point cloud or distance matrix has "
-                         "no surface to deform)")
+    g = require_mesh(load_input(input_spec, force=force))
     fixed = g.to_internal(parse_ids(landmarks))
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(fixed, zero_tol=zero_tol, ids=g.ids)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import click
 import numpy as np
 
 from ..errors import InputError
-from ..shapes.io import atomic_write
+from ..output import write_bytes
 from .common import build_shape, emit_json, info, json_option, pop_shape_options, shape_options
 
 
@@ -22,7 +23,8 @@ def command(input_spec, landmarks, output, as_json, **kwargs):
     """Farthest-point samples and their distance matrix (diameter 1) into an .npz file.
 
     The file holds D (N x N), samples (the input's vertex ids, in FPS order),
-    scale (the raw diameter), metric and backend.
+    scale (the raw diameter), metric and backend; every command (and
+    ``shapecond.load``) reads it back as a distance-matrix input.
     """
     shape_kw = pop_shape_options(kwargs)
     if shape_kw.get("target") == "dense":
@@ -31,11 +33,11 @@ def command(input_spec, landmarks, output, as_json, **kwargs):
     if not str(output).endswith(".npz"):
         raise InputError(f"{output}: the output must be an .npz file")
     shape = build_shape(input_spec, landmarks=landmarks, **shape_kw)
-    with atomic_write(Path(output)) as tmp:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, D=shape.D, samples=shape.sample_ids, scale=shape.scale, metric=shape.metric,
-                     backend=str(shape.backend), covering_radius=np.nan if shape.covering_radius is None
-                     else shape.covering_radius)
+    buffer = io.BytesIO()  # built in memory: a failing write then never leaves numpy's zip half-open
+    np.savez(buffer, D=shape.D, samples=shape.sample_ids, scale=shape.scale, metric=shape.metric,
+             backend=str(shape.backend), covering_radius=np.nan if shape.covering_radius is None
+             else shape.covering_radius)
+    write_bytes(Path(output), buffer.getvalue())
     summary = {"output": str(output), "n_points": shape.n_points, "metric": shape.metric,
                "backend": shape.backend, "scale": shape.scale, "covering_radius": shape.covering_radius,
                "samples": shape.sample_ids}

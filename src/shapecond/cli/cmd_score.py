@@ -2,9 +2,11 @@
 
 Prints σ lower/upper/exact, the size-free σ̂ = σ√N, the condition-number
 bracket σ ≤ κ ≤ 2σ + 1 (Theorem 4.1), the witness map (the near-isometry that
-makes the shape hard to match), for dense targets on a mesh whether the
-witness is a symmetry within sampling resolution, and the scale-aware score
-δ(ε) with its own witness (``shapecond.symmetry.scale``).
+makes the shape hard to match), for dense targets on a mesh whether the witness
+is a symmetry within sampling resolution, the scale-aware score δ(ε) with its
+own witness (``symmetry.scale``: the widest self-map within the distortion of
+real deformations), and a one-line verdict of what the numbers mean for
+matching (``symmetry.verdict``).
 """
 
 from __future__ import annotations
@@ -12,8 +14,8 @@ from __future__ import annotations
 import click
 import numpy as np
 
-from ..symmetry.report import score_report
-from .common import build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
+from ..symmetry.report import score_shape
+from .common import Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
     pop_shape_options, shape_options
 
 
@@ -25,17 +27,17 @@ from .common import build_shape, emit_json, fmt, info, json_option, load_geometr
 @click.option("--exact", "exact", is_flag=True, help="Compute σ exactly (enumeration or branch and bound "
               "within --time-limit); by default only when enumeration is quick (N <= 9).")
 @click.option("--upper", is_flag=True, help="LP upper bound when σ is not known exactly (small N only).")
-@click.option("--time-limit", type=float, default=10.0, show_default=True,
+@click.option("--time-limit", type=Float(0.0, lo_open=True), default=10.0, show_default=True,
               help="Seconds for each of the exact and LP solves.")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Work spent by the witness search.")
 @click.option("--witness-png", type=click.Path(dir_okay=False), default=None,
               help="Write a picture of the witness map (meshes and point clouds).")
-@click.option("--epsilon", type=float, default=None,
+@click.option("--epsilon", type=Float(0.0), default=None,
               help="Distortion level of the scale-aware score δ(ε), RMS, in diameters "
                    "[default: the median sample spacing].")
 @click.option("--scale-witness-png", type=click.Path(dir_okay=False), default=None,
-              help="Write a picture of the scale-aware witness (the widest map within ε).")
+              help="Write a picture of the scale-aware witness (the widest self-map within ε).")
 @json_option
 def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png, epsilon, scale_witness_png,
             as_json, **kw):
@@ -47,12 +49,14 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
     t0 = time.perf_counter()
     opts = pop_shape_options(kw)
     ids = parse_ids(landmarks)
-    loaded = load_geometry_or_matrix(input_spec, opts.get("largest_component", False), opts.get("symmetry_map"))
+    loaded = load_geometry_or_matrix(input_spec, opts.get("largest_component", False), opts.get("symmetry_map"),
+                                     opts.get("force", False))
     shape = build_shape(input_spec, landmarks=ids, loaded=loaded, **opts)
-    report, sc = score_report(shape, ids, exact=True if exact else "auto", upper=upper,
-                              time_limit=time_limit, seed=opts.get("seed", 0), effort=effort,
-                              epsilon=epsilon)
-    for png, witness in ((witness_png, sc.witness), (scale_witness_png, report["scale"]["witness"])):
+    result = score_shape(shape, ids, exact=True if exact else "auto", upper=upper, time_limit=time_limit,
+                         seed=opts.get("seed", 0), effort=effort, force=opts.get("force", False),
+                         epsilon=epsilon)
+    report, sc = result.to_dict(), result.score
+    for png, witness in ((witness_png, sc.witness), (scale_witness_png, result.scale.witness)):
         if not png:
             continue
         if shape.geometry is None:
@@ -60,7 +64,7 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
         else:
             from ..viz.witness import render_witness_png
 
-            render_witness_png(shape, np.asarray(witness), png, landmarks=tuple(sc.landmarks))
+            render_witness_png(shape, witness, png, landmarks=tuple(sc.landmarks))
     report["seconds"] = time.perf_counter() - t0  # everything, geodesics included
     if as_json:
         emit_json(report)
@@ -82,6 +86,7 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
                f"the widest self-map distorting distances by at most eps moves the samples "
                f"{fmt(d['displacement'])} RMS ({100 * d['moved']:.0f} % of them"
                + (", an exact isometry)" if d["isometry"] else ")"))
+    click.echo(f"verdict           {report['verdict']}")
     for note in report["notes"]:
         info(f"note: {note}")
     click.echo(f"seconds           {report['seconds']:.2f}")

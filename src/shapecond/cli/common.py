@@ -2,13 +2,14 @@
 
 ``shape_options`` adds the options that turn an INPUT into a metric shape;
 ``build_shape`` does it; ``emit_json`` prints the one JSON object of ``--json``
-(infinite values as the string "inf", missing ones as null).
+(infinite values as the string "inf", missing ones as null).  Numeric options
+use the parameter types ``Int``, ``Float`` and ``SEED``, which call the checks
+of ``shapecond.checks``: a bad value gets the same one-line message as from
+the Python functions.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import json
 import math
 import sys
 from pathlib import Path
@@ -16,12 +17,56 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..checks import check_float, check_int, check_seed, parse_ids
 from ..errors import InputError
+from ..jsonable import dumps, jsonable  # noqa: F401  (jsonable: used by the commands' tests)
 from ..shapes.geometry import Geometry
-from ..shapes.io import load_input, read_landmarks, read_symmetry_map
-from ..shapes.metric import MetricShape, from_distance_matrix, metric_shape
+from ..shapes.io import load_input, read_symmetry_map
+from ..shapes.metric import MetricShape
 
 DEFAULT_POINTS = 400
+
+
+def _option_name(param) -> str:
+    return param.opts[0] if param is not None and getattr(param, "opts", None) else "value"
+
+
+class Int(click.ParamType):
+    """An integer option checked by ``checks.check_int`` (range in the message)."""
+
+    name = "integer"
+
+    def __init__(self, lo=None, hi=None):
+        self.lo, self.hi = lo, hi
+
+    def convert(self, value, param, ctx):
+        return check_int(value, _option_name(param), lo=self.lo, hi=self.hi)
+
+
+class Float(click.ParamType):
+    """A finite float option checked by ``checks.check_float``."""
+
+    name = "number"
+
+    def __init__(self, lo=None, hi=None, lo_open=False, hi_open=False):
+        self.kw = dict(lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open)
+
+    def convert(self, value, param, ctx):
+        return check_float(value, _option_name(param), **self.kw)
+
+
+class Seed(click.ParamType):
+    """A seed: an integer in [0, 2**63 - 1]."""
+
+    name = "integer"
+
+    def convert(self, value, param, ctx):
+        return check_seed(value, _option_name(param))
+
+
+SEED = Seed()
+#: Largest N accepted by the options (the memory and time guards refuse far less).
+MAX_POINTS = 100_000
 
 
 def error(message: str):
@@ -41,22 +86,23 @@ def progress_enabled() -> bool:
 def shape_options(f):
     """Options that build the metric shape: --points, --metric, --geodesic-backend, ..."""
     options = [
-        click.option("--points", "-n", "points", type=int, default=None,
+        click.option("--points", "-n", "points", type=Int(3, MAX_POINTS), default=None,
                      help=f"Number of farthest-point samples N [default: {DEFAULT_POINTS}]."),
         click.option("--metric", type=click.Choice(["geodesic", "euclidean"]), default="geodesic",
                      show_default=True, help="Distance between points."),
         click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
                      show_default=True, help="Geodesic solver (exact needs the 'exact' extra)."),
-        click.option("--seed", type=int, default=0, show_default=True, help="Seed of every random choice."),
+        click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random choice."),
         click.option("--largest-component", is_flag=True, help="Keep only the largest connected component."),
         click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache."),
         click.option("--target", type=click.Choice(["samples", "dense"]), default=None,
                      help="Where maps may send samples: other samples (the paper) or a denser FPS set "
                           "[default: dense for meshes, samples for a distance matrix]."),
-        click.option("--target-factor", type=int, default=8, show_default=True,
+        click.option("--target-factor", type=Int(1, 1000), default=8, show_default=True,
                      help="Dense targets: M = factor x N points."),
         click.option("--symmetry-map", type=click.Path(dir_okay=False), default=None,
                      help="A .sym file (line i = 1-based id of the mirror of vertex i): sample in mirror pairs."),
+        force_option,
     ]
     for option in reversed(options):
         f = option(f)
@@ -64,7 +110,13 @@ def shape_options(f):
 
 
 SHAPE_OPTION_NAMES = ("points", "metric", "geodesic_backend", "seed", "largest_component", "no_cache",
-                      "target", "target_factor", "symmetry_map")
+                      "target", "target_factor", "symmetry_map", "force")
+
+
+def force_option(f):
+    """``--force``: run work estimated beyond the time or memory limits (``shapecond.limits``)."""
+    return click.option("--force", is_flag=True,
+                        help="Run even when the estimated time or memory is beyond the limits.")(f)
 
 
 def pop_shape_options(kwargs: dict) -> dict:
@@ -72,35 +124,10 @@ def pop_shape_options(kwargs: dict) -> dict:
     return {k: kwargs.pop(k) for k in SHAPE_OPTION_NAMES if k in kwargs}
 
 
-def parse_ids(text) -> list[int]:
-    """``"3,5,9"`` -> [3, 5, 9]; a path to an existing file reads its first column."""
-    if text is None:
-        return []
-    if isinstance(text, (list, tuple)):
-        return [int(v) for v in text]
-    text = str(text).strip()
-    if not text:
-        return []
-    if Path(text).is_file():
-        return [int(v) for v in read_landmarks(text)]
-    ids = []
-    for tok in text.replace(" ", "").split(","):
-        if not tok:
-            continue
-        try:
-            ids.append(int(tok))
-        except ValueError:
-            raise InputError(f"{tok!r} is not a vertex id (expected e.g. 12,405,877 or a file of ids)") from None
-    if any(v < 0 for v in ids):
-        raise InputError("vertex ids must be non-negative")
-    if len(set(ids)) != len(ids):
-        raise InputError(f"landmark ids are repeated: {text}")
-    return ids
-
-
-def load_geometry_or_matrix(input_spec: str, largest_component: bool = False, symmetry_map=None):
+def load_geometry_or_matrix(input_spec: str, largest_component: bool = False, symmetry_map=None,
+                            force: bool = False):
     """The user's INPUT as a Geometry (with its symmetry map attached) or a distance matrix."""
-    loaded = load_input(input_spec, largest_component=largest_component)
+    loaded = load_input(input_spec, largest_component=largest_component, force=force)
     if symmetry_map is not None:
         if not isinstance(loaded, Geometry):
             raise InputError("--symmetry-map needs a mesh or point cloud input")
@@ -110,66 +137,23 @@ def load_geometry_or_matrix(input_spec: str, largest_component: bool = False, sy
 
 def build_shape(input_spec: str, landmarks=(), points=None, metric="geodesic", geodesic_backend="heat", seed=0,
                 largest_component=False, no_cache=False, target=None, target_factor=8, symmetry_map=None,
-                loaded=None, progress=None) -> MetricShape:
-    """Turn INPUT and the shape options into a ``MetricShape``; landmarks (input ids) come first.
+                loaded=None, force=False, progress=None) -> MetricShape:
+    """Turn INPUT and the shape options into a ``MetricShape`` (``api.metric_shape``); landmarks come first.
 
     ``progress``: show the sampling's progress bar (default: when stderr is a terminal).
     """
+    from ..api import metric_shape
+
     if loaded is None:
-        loaded = load_geometry_or_matrix(input_spec, largest_component, symmetry_map)
-    ids = parse_ids(landmarks)
-    if isinstance(loaded, np.ndarray):
-        n = loaded.shape[0]
-        if points is not None and points != n:
-            raise InputError(f"--points does not apply to a distance matrix ({n} x {n}); it is used whole")
-        if target == "dense":
-            raise InputError("--target dense needs a mesh or point cloud, not a distance matrix")
-        bad = [v for v in ids if v >= n]
-        if bad:
-            raise InputError(f"landmark {bad[0]} is out of range for a {n} x {n} distance matrix (rows 0..{n - 1})")
-        return from_distance_matrix(loaded, landmarks=ids, name=Path(str(input_spec)).name)
-    if target is None:
-        target = "dense"
-    n_points = DEFAULT_POINTS if points is None else points
-    if n_points > loaded.n_vertices and points is None:
-        n_points = loaded.n_vertices
-    internal = loaded.to_internal(ids)
-    return metric_shape(loaded, n_points=n_points, metric=metric, backend=geodesic_backend, seed=seed,
-                        landmarks=internal, target=target, target_factor=target_factor, cache=not no_cache,
-                        progress=progress_enabled() if progress is None else progress)
-
-
-def jsonable(obj):
-    """Python/JSON values: inf -> "inf", nan/None -> null, numpy -> Python, dataclasses -> dicts."""
-    if hasattr(obj, "to_dict"):
-        return jsonable(obj.to_dict())
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return jsonable(dataclasses.asdict(obj))
-    if isinstance(obj, dict):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return jsonable(obj.tolist())
-    if isinstance(obj, (np.bool_, bool)):
-        return bool(obj)
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        if math.isnan(v):
-            return None
-        if math.isinf(v):
-            return "inf" if v > 0 else "-inf"
-        return v
-    if isinstance(obj, Path):
-        return str(obj)
-    return obj
+        loaded = load_geometry_or_matrix(input_spec, largest_component, symmetry_map, force)
+    return metric_shape(loaded, points, landmarks=landmarks, metric=metric, backend=geodesic_backend, seed=seed,
+                        target=target, target_factor=target_factor, cache=not no_cache,
+                        progress=progress_enabled() if progress is None else progress, force=force)
 
 
 def emit_json(obj) -> None:
     """Print one JSON object on stdout and nothing else."""
-    click.echo(json.dumps(jsonable(obj), allow_nan=False))
+    click.echo(dumps(obj))
 
 
 def json_option(f):

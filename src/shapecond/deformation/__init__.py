@@ -1,4 +1,4 @@
-"""Local symmetry score for deformation-based matching (paper Section 5; DESIGN.md 2.3, 3).
+"""Local symmetry score for deformation-based matching (paper Section 5).
 
 * ``energy``      E(P) (point-to-plane proximity + edge springs or ARAP) and its exact Hessian at 0
 * ``solver``      sparse Cholesky (CHOLMOD) factor of H + sM, reused for every landmark set

@@ -1,6 +1,6 @@
 """Deformation energy E(P) of a mesh matched to itself and its exact Hessian at P = 0.
 
-Paper Section 5 ("local symmetry score"); DESIGN.md sections 2.3 and 3.  A
+Paper Section 5 ("local symmetry score").  A
 deformation-based matcher moves every vertex ``x_i`` by ``p_i`` and minimises
 
     E(P) = sum_i a_i (n_i . p_i)^2 + alpha * E_stretch(P)
@@ -37,10 +37,14 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..checks import check_float
 from ..errors import InputError
 
 ENERGIES = ("springs", "arap")
 DEFAULT_ALPHA = 1.0
+#: Allowed alpha: beyond 1e6 the stretching term swamps proximity and the
+#: factorisation of H + sM loses definiteness in float64 (CHOLMOD refuses at 1e16).
+ALPHA_RANGE = (1e-6, 1e6)
 
 
 def _check_mesh(vertices, faces) -> tuple[np.ndarray, np.ndarray]:
@@ -220,8 +224,7 @@ def hessian(V: np.ndarray, F: np.ndarray, alpha: float = DEFAULT_ALPHA, energy: 
     """
     if energy not in ENERGIES:
         raise InputError(f"unknown energy {energy!r}; choose one of {', '.join(ENERGIES)}")
-    if not np.isfinite(alpha) or alpha < 0:
-        raise InputError(f"alpha must be a finite number >= 0, got {alpha}")
+    alpha = check_float(alpha, "alpha", lo=0.0, hi=ALPHA_RANGE[1])
     stretch = springs_hessian(V, F) if energy == "springs" else arap_hessian(V, F)
     H = (proximity_hessian(V, F) + alpha * stretch).tocsr()
     if energy == "arap":  # springs are symmetric by construction; the Schur complement up to rounding

@@ -1,7 +1,6 @@
 """Heat map of the local score with each vertex fixed, and greedy landmark selection.
 
-Paper Sections 5-6, DESIGN.md section 3; the local version of CNBS (issue 6,
-item 2).  For a candidate vertex ``v`` the exact quantity is ``lambda_min`` of
+Paper Sections 5-6; the local version of CNBS.  For a candidate vertex ``v`` the exact quantity is ``lambda_min`` of
 ``H v = lambda M v`` with the coordinates of ``v`` (and of the landmarks already
 chosen) removed: one eigen-solve per vertex, far too slow for every vertex of a
 mesh.
@@ -40,6 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..jsonable import jsonable
 from ..errors import InputError
 from .local_score import LAMBDA_REF, ZERO_TOL, LocalProblem, score_from_lambda
 
@@ -155,8 +155,8 @@ class LocalLandmarks:
 
     def to_dict(self, ids=None) -> dict:
         ids = np.arange(max(self.landmarks, default=0) + 1) if ids is None else np.asarray(ids)
-        return {"landmarks": [int(ids[v]) for v in self.landmarks], "scores": list(self.scores),
-                "initial": self.initial, "seconds": self.seconds}
+        return jsonable({"landmarks": [int(ids[v]) for v in self.landmarks], "scores": list(self.scores),
+                "initial": self.initial, "seconds": self.seconds})
 
 
 def select_local_landmarks(problem: LocalProblem, k: int, start=(), n_modes: int = N_MODES,

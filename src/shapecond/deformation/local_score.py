@@ -1,6 +1,6 @@
 """Local symmetry score sigma_inf for deformation-based matching (paper Section 5).
 
-DESIGN.md sections 2.3 and 3.  A deformation-based matcher started at the
+A deformation-based matcher started at the
 identity finds the displacement ``P`` minimising ``E(P)`` (``energy.py``); near
 the minimum ``E(P) ~ 1/2 P^T H P``.  The local score is the largest
 displacement per unit of energy,
@@ -10,7 +10,7 @@ displacement per unit of energy,
 with ``lambda_min`` the smallest eigenvalue of ``H v = lambda M v`` and ``M`` the
 lumped area mass matrix.  **The paper writes 2 / sqrt(lambda_min); with
 E ~ 1/2 P^T H P the supremum is sqrt(2 / lambda_min), which is what we compute**
-(the paper's value is always sqrt(2) times larger; DESIGN.md 2.3).  The mass matrix makes ``|P|_M`` an area integral, so the
+(the paper's value is always sqrt(2) times larger).  The mass matrix makes ``|P|_M`` an area integral, so the
 score of the same surface does not drift with the resolution of its mesh
 (without it, lambda_min fell 4x from 10k to 41k vertices).
 
@@ -35,8 +35,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..jsonable import jsonable
+from ..checks import check_float, check_ids
 from ..errors import InputError, TooLargeError
-from .energy import DEFAULT_ALPHA, hessian, mass_diagonal, normalized_mesh
+from .energy import ALPHA_RANGE, DEFAULT_ALPHA, hessian, mass_diagonal, normalized_mesh
 from .rigid import name_zero_modes
 from .solver import SHIFT, ShiftInvertSolver
 
@@ -72,14 +74,14 @@ class LocalScore:
 
     def to_dict(self) -> dict:
         """JSON-ready summary with exactly the keys of ``shapecond local --json``."""
-        return {
+        return jsonable({
             "score": self.score,
             "lambda_min": self.lambda_min,
             "zero_modes": list(self.zero_modes),
             "n_vertices": self.n_vertices,
             "landmarks": [int(v) for v in self.landmarks],
             "seconds": self.seconds,
-        }
+        })
 
 
 def score_from_lambda(lam: float, zero_tol: float = ZERO_TOL) -> float:
@@ -104,6 +106,7 @@ class LocalProblem:
     def __init__(self, vertices, faces, alpha: float = DEFAULT_ALPHA, energy: str = "springs",
                  shift: float = SHIFT, backend: str | None = None):
         t0 = time.perf_counter()
+        alpha = check_float(alpha, "alpha", lo=ALPHA_RANGE[0], hi=ALPHA_RANGE[1])
         if faces is not None and np.asarray(vertices).shape[0] > MAX_VERTICES:
             raise TooLargeError(f"the local score is limited to {MAX_VERTICES} vertices (it factorises a "
                                 "3n x 3n matrix); simplify the mesh first")
@@ -120,11 +123,11 @@ class LocalProblem:
         return int(self.V.shape[0])
 
     def check_fixed(self, fixed) -> np.ndarray:
-        fixed = np.asarray(list(fixed), dtype=np.int64).ravel()
-        if fixed.size and (fixed.min() < 0 or fixed.max() >= self.n_vertices):
+        """Distinct vertex indices in range, in the caller's order (``InputError`` otherwise)."""
+        fixed = np.asarray(check_ids(fixed, "landmarks"), dtype=np.int64)
+        if fixed.size and fixed.max() >= self.n_vertices:
             raise InputError(f"landmark index out of range 0..{self.n_vertices - 1}")
-        _, first = np.unique(fixed, return_index=True)
-        return fixed[np.sort(first)]  # duplicates dropped, the caller's order kept
+        return fixed
 
     def spectrum(self, fixed=(), zero_tol: float = ZERO_TOL, k: int = 4, max_k: int = 32):
         """Smallest eigenpairs with ``fixed`` vertices, enough to see every zero mode.
@@ -143,6 +146,7 @@ class LocalProblem:
     def score(self, fixed=(), zero_tol: float = ZERO_TOL, ids=None) -> LocalScore:
         """``LocalScore`` with the internal vertex indices ``fixed`` held in place."""
         t0 = time.perf_counter()
+        zero_tol = check_float(zero_tol, "zero_tol", lo=0.0, hi=1.0, lo_open=True, hi_open=True)
         fixed = self.check_fixed(fixed)
         w, X, n_zero = self.spectrum(fixed, zero_tol)
         Z = X[:, :n_zero]

@@ -1,6 +1,6 @@
 """Naming zero modes of the deformation Hessian by projection onto the six rigid motions.
 
-DESIGN.md section 3 (local score): a zero mode of ``H v = lambda M v`` is a
+A zero mode of ``H v = lambda M v`` is a
 displacement field that a deformation-based matcher cannot see, e.g. a rotation
 of a sphere or the axial rotation of a cylinder.  We describe each one in terms
 of rigid motions ``v(x) = t + w x (x - c)`` with ``c`` the area centroid:

@@ -1,6 +1,6 @@
 """Smallest eigenpairs of ``H v = lambda M v`` with fixed vertices, one factorisation for all.
 
-DESIGN.md section 3 (local score) and paper Section 6 (landmarks remove the
+Paper Sections 5 and 6 (landmarks remove the
 rows and columns of their coordinates).
 
 ``A = H + s M`` (``s = SHIFT``, small, so A is positive definite even with
@@ -11,61 +11,16 @@ landmark or trying a candidate costs three solves instead of a new
 factorisation.  The eigenpairs come from ARPACK in shift-invert mode (k = 4,
 ncv = 30, tol = 1e-8: ~31 solves).
 
-Backends (``backend=``), picked by measurement.  Factorisation of ``A`` alone /
-one solve, single-threaded, quiet 2-core machine, springs energy; 10k = bumpy
-blob (10,242 vertices), 53k = TOSCA david0, 111k = cat0 after one midpoint
-subdivision:
+Backends (``backend=``), picked by measurement (the table of factorisation and
+solve times per backend and mesh size, and the alternatives tried, are in
+``benchmarks/RESULTS.md``, section "Local score solver backends"):
 
-==========================================  ===========  ===========  ===========
-backend                                     10k          53k          111k
-==========================================  ===========  ===========  ===========
-**cholmod**: CHOLMOD via ``cholespy`` 2.2   0.45 s / 8   1.3 s / 31   5.9 s / 87
-CHOLMOD via scikit-sparse 0.4 (apt          0.46-0.89 s  1.1-1.6 s /  5.0-6.7 s /
-SuiteSparse 5.12 with METIS; supernodal or  / 9-12 ms    31-37 ms     86-113 ms
-simplicial, AMD or METIS)
-qdldl 0.1.9 (AMD)                           1.1 s / 12   1.2 s / 36   8.6 s / 125
-pypardiso 0.4.7 (MKL)                       -            0.9 s / 92   -
-**superlu**: SuperLU, nested dissection     0.44 s / 10  3.5 s / 70   16 s / 175
-==========================================  ===========  ===========  ===========
-
-(ms per solve after the slash.)  ``cholmod`` is the default: a pip wheel of
-under 1 MB with no dependencies, as fast as scikit-sparse's CHOLMOD (which
-needs Debian's libsuitesparse-dev, and scikit-sparse 0.5 does not build against
-its SuiteSparse 5), 2.7x faster than SuperLU to factorise at 53k and 2.2x per
-solve.  pypardiso factorises fastest but its solve re-checks the matrix every
-call (3x slower solves) and it pulls in ~700 MB of MKL.  An earlier
-measurement of cholespy (1.0 s at 10k, 13.8 s at 41k, on a loaded machine) was
-not reproduced.  End to end (Hessian, factor, score; benchmarks/RESULTS.md):
-david0 6.3 s with SuperLU, 2.9 s with cholmod; cat0 at 111k 19.8 s -> 10.4 s;
-peak memory about halved (L only instead of L and U).
-
-Known regression: on the bumpy blob at 41k vertices (a closed, compact,
-sphere-like surface, whose separators are long) cholmod takes 6.6 s end to end
-against 4.1 s for SuperLU (factor 4.6 s against 2.7 s): cholespy's CHOLMOD is
-simplicial, and there the dense fronts favour a supernodal factor.
-scikit-sparse's supernodal CHOLMOD with METIS factorises it in 2.8 s (simplicial
-METIS 4.4 s, AMD 14.5 s), but needs apt SuiteSparse and a source build, and is
-no faster than cholespy on the TOSCA meshes; not adopted.
-
-``superlu`` is kept as the fallback when cholespy cannot be imported (a
-platform without its wheel) or CHOLMOD finds ``A`` not positive definite in
-floating point, and as an independent check of the Cholesky path in the tests.
-It is LU without pivoting in a hand-written **geometric nested-dissection
-ordering of the vertex graph** (``nested_dissection``; each vertex's three
-coordinates kept together), because SciPy's own orderings are far slower on
-these matrices: 0.9 s (COLAMD) / 3.8 s (MMD on A+A^T) at 10k vertices.
-
-Other things measured:
-
-* LOBPCG preconditioned by pyamg smoothed aggregation (rigid-body near null
-  space) did not converge in 300 iterations at 10k vertices (76 s): the
-  operator couples a stiff normal direction with soft tangential stretching,
-  which aggregation handles badly.  Rejected.
-* ARPACK's ``ncv`` in 12..30 and ``tol`` 1e-6 or 1e-8: 25-46 solves on david0
-  with and without landmarks, no setting better everywhere than ncv = 30 (31
-  solves without landmarks); the eigenvalues agreed to 1e-11.  Block solves
-  are cheaper per column (4 columns in 46 ms against 31 ms for one at 53k),
-  which block methods could use; not needed for the target.
+* ``cholmod`` (default): CHOLMOD through ``cholespy``, a sub-1 MB wheel, 2.7x faster
+  than SuperLU to factorise at 53k vertices and 2.2x per solve, about half the memory;
+* ``superlu``: LU without pivoting in a geometric **nested-dissection ordering of the
+  vertex graph** (``nested_dissection``; each vertex's three coordinates kept
+  together; SciPy's own orderings are far slower here), used when CHOLMOD finds ``A``
+  not positive definite in floating point, and as an independent check in the tests.
 """
 
 from __future__ import annotations
@@ -74,21 +29,17 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-try:  # optional: limits BLAS threads around ARPACK
-    from threadpoolctl import threadpool_limits as _limits
-except ImportError:  # pragma: no cover
-    _limits = None
-
 from .. import cholesky
 from ..errors import InputError
+from ..limits import one_blas_thread
 
 SHIFT = 1e-5  # relative to the proximity stiffness 2 of the unit-area mesh
 BACKENDS = ("cholmod", "superlu")
 
 
 def default_backend() -> str:
-    """``"cholmod"`` (sparse Cholesky through cholespy) when importable, else ``"superlu"``."""
-    return "cholmod" if cholesky.available() else "superlu"
+    """``"cholmod"``: sparse Cholesky through cholespy (``"superlu"`` on request)."""
+    return "cholmod"
 
 
 def vertex_graph(H: sp.spmatrix) -> sp.csr_matrix:
@@ -148,18 +99,6 @@ def nested_dissection(V: np.ndarray, adj: sp.csr_matrix, leaf: int = 48) -> np.n
     return order.astype(np.int64)
 
 
-def one_blas_thread():
-    """Context manager limiting BLAS to one thread (no-op without threadpoolctl).
-
-    Small dense BLAS calls (ARPACK, dense eigh in tests) thrash when threaded on
-    a loaded 2-core machine: 3.9 s instead of 0.17 s measured inside ARPACK.
-    """
-    if _limits is None:  # pragma: no cover
-        import contextlib
-        return contextlib.nullcontext()
-    return _limits(limits=1, user_api="blas")
-
-
 class ShiftInvertSolver:
     """Factor of ``A = H + SHIFT * M``, with fixed-vertex solves.
 
@@ -181,8 +120,6 @@ class ShiftInvertSolver:
         backend = default_backend() if backend is None else backend
         if backend not in BACKENDS:
             raise InputError(f"unknown solver backend {backend!r}; choose one of {', '.join(BACKENDS)}")
-        if backend == "cholmod" and not cholesky.available():
-            raise InputError("the cholmod backend needs the cholespy package (pip install cholespy)")
         A = self.H + sp.diags(self.shift * self.mass)
         self._chol = self.lu = None
         if backend == "cholmod":

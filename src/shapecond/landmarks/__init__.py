@@ -58,7 +58,7 @@ def prefix_scores(shape, sample_indices, fixed=(), seed: int = 0, effort: str = 
 
 
 def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
-    """CNBS on the local score (issue 6 item 2) via ``shapecond.deformation``.
+    """CNBS on the local score via ``shapecond.deformation``.
 
     Landmarks are mesh vertices chosen by ``deformation.heatmap.select_local_landmarks``
     (greedy on the local score σ_∞ of paper Section 5); the scores reported are local

@@ -1,4 +1,4 @@
-"""Condition Number Based Sampling, global version (paper Section 6; DESIGN.md 3, "CNBS heat map").
+"""Condition Number Based Sampling, global version (paper Section 6).
 
 CNBS greedily adds the landmark that lowers the global symmetry score σ (paper Eq. 5)
 most.  The heat map of a step is σ with each candidate sample p fixed in addition to
@@ -6,7 +6,7 @@ the landmarks L so far (paper Figures 1 and 4); the next landmark is its argmin.
 scores after each landmark form the "vector of symmetry scores" of Section 6.
 
 σ is known only through a lower bound with a witness map (``witness_search``), so the
-heat map is a lower bound per candidate, assembled as in DESIGN.md 3:
+heat map is a lower bound per candidate, assembled in four steps:
 
 1. **Fixed by the witness.**  If the best witness map T of the previous step already
    fixes p (T(p) = p, e.g. p on the mirror plane of a mirror witness), T is feasible
@@ -21,7 +21,7 @@ heat map is a lower bound per candidate, assembled as in DESIGN.md 3:
 4. **Re-solves.**  The candidates the witness maps move farthest
    (max over maps of D[p, T(p)]) are where fixing p hurts the witness most and where
    the argmin lies; the ``resolve_fraction`` (default 20 %) of them with the largest
-   move are searched again; heat[p] is the max of all bounds.  DESIGN.md's prototype
+   move are searched again; heat[p] is the max of all bounds.  The first prototype
    re-solved them with a fresh multistart search; here a fresh ``witness_search``
    costs 8-18 s at N = 400 on the shared machine (its spectral and Gilmore-Lawler
    starts do not depend on p but are recomputed), so the default re-solve is an
@@ -65,7 +65,7 @@ from ..symmetry.objective import ISOMETRY_RTOL
 from .warm import WarmPolisher, _search_module
 
 #: Share of the candidates, those moved farthest by the witness maps, that get a
-#: full re-solve in every heat map (DESIGN.md 3: 20 % kept the argmin at N = 400).
+#: full re-solve in every heat map (20 % kept the argmin at N = 400 in the prototype).
 RESOLVE_FRACTION = 0.2
 #: Number of best distinct witness maps used as warm starts.
 N_MAPS = 4
@@ -342,11 +342,12 @@ def _swap_witness(D, n, L, base, budget=None):
 def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
                    n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
                    resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False,
-                   budget=None):
+                   budget=None, base=None):
     """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
 
     ``budget``: None for the paper's σ; a Dist² budget for the scale-aware score
-    (``heat_map``), the ``cnbs-scale`` method.
+    (``heat_map``), the ``cnbs-scale`` method.  ``base``: the ``witness_search``
+    result with ``fixed`` fixed (and the same ``budget``), when already known.
 
     Returns
     -------
@@ -360,7 +361,8 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
     L = [int(v) for v in fixed]
     if k < 0 or k + len(L) > n:
         raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(L)} already fixed)")
-    base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort, budget=budget)
+    if base is None:
+        base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort, budget=budget)
     initial = float(base.sigma)
     new, scores, maps = [], [], []
     for step in range(k):

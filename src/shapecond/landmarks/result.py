@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..jsonable import jsonable
 from ..errors import InputError
 
 
@@ -52,7 +53,7 @@ class LandmarkResult:
 
     def to_dict(self) -> dict:
         """JSON-ready dict (keys of the CLI: landmarks, scores, method, seconds, ...)."""
-        return {
+        return jsonable({
             "landmarks": [int(v) for v in self.landmarks],
             "scores": [None if s is None else float(s) for s in self.scores],
             "method": self.method,
@@ -60,7 +61,7 @@ class LandmarkResult:
             "sample_indices": [int(v) for v in self.sample_indices],
             "initial_score": None if self.initial_score is None else float(self.initial_score),
             "score": self.score,
-        }
+        })
 
 
 def sample_of_vertex(shape, vertex: int) -> int:

@@ -10,8 +10,8 @@ samples are an error: two landmarks would collapse into one.
 
 from __future__ import annotations
 
+from ..checks import check_ids, read_ids
 from ..errors import InputError
-from ..shapes.io import read_landmarks
 from .result import sample_of_vertex
 
 
@@ -29,8 +29,8 @@ def user_landmarks(shape, ids=None, path=None) -> list[int]:
     if ids is None:
         if path is None:
             raise InputError("user landmarks need ids or a landmark file")
-        ids = read_landmarks(path)
-    ids = [int(v) for v in ids]
+        ids = read_ids(path)
+    ids = check_ids(ids)
     if shape.geometry is not None:
         internal = shape.geometry.to_internal(ids)
     else:

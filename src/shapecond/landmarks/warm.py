@@ -1,4 +1,4 @@
-"""Warm-started local search for the CNBS heat map (DESIGN.md 3, "CNBS heat map").
+"""Warm-started local search for the CNBS heat map.
 
 One heat map needs a lower bound of σ (paper Eq. 5) with each of N candidate samples
 fixed.  A fresh ``witness_search`` per candidate costs seconds at N = 400; here each

@@ -1,4 +1,4 @@
-"""Landmark-guided matching and the paper's evaluation (Section 7; DESIGN.md section 3).
+"""Landmark-guided matching and the paper's evaluation (Section 7).
 
 Data flow, always **source to target**::
 

@@ -1,4 +1,4 @@
-"""Candidate correspondences for landmark-guided matching (DESIGN.md section 3).
+"""Candidate correspondences for landmark-guided matching.
 
 Leordeanu–Hebert spectral matching scores every *candidate assignment*
 ``(x -> y)`` of a source sample ``x`` to a target sample ``y``.  Over all

@@ -56,10 +56,8 @@ def dense_map(source: SampledSurface, target: SampledSurface, t, method: str = "
     near_s = source.nearest
     if method == "nearest":
         return target.samples[t[near_s]].astype(np.int64)
-    # compare distances in the common unit of the two shapes
-    Rs = source.rows
-    Rt = target.rows
-    ratio = np.float32(source.unit / target.unit)
+    # compare distances in the common unit of the two shapes (sqrt(area)), in float64: scale-free
+    Rs, Rt = source.rows, target.rows
     near_t = target.nearest
     by_target_sample = _groups(near_t, target.n_samples)
     by_source_sample = _groups(near_s, source.n_samples)
@@ -76,8 +74,8 @@ def dense_map(source: SampledSurface, target: SampledSurface, t, method: str = "
         if W.size == 0:
             out[V] = target.samples[t[s]]
             continue
-        a = Rs[np.ix_(A, V)] / ratio          # (k, |V|) in target raw units
-        b = Rt[np.ix_(t[A], W)]               # (k, |W|)
+        a = Rs[np.ix_(A, V)].astype(np.float64) / source.unit      # (k, |V|)
+        b = Rt[np.ix_(t[A], W)].astype(np.float64) / target.unit   # (k, |W|)
         cost = (a * a).sum(0)[:, None] + (b * b).sum(0)[None, :] - 2.0 * (a.T @ b)
         out[V] = W[np.argmin(cost, axis=1)]
     return out

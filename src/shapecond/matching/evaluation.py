@@ -36,7 +36,6 @@ should share the cache folder ``$SHAPECOND_CACHE``).
 
 from __future__ import annotations
 
-import hashlib
 import math
 import re
 import time
@@ -45,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from shapecond.jsonable import jsonable
 from shapecond.errors import InputError
 from shapecond.matching import refine
 from shapecond.matching.candidates import recall
@@ -68,66 +68,36 @@ MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 # --- landmark methods and scores ---------------------------------------------------
 
-def _fps_prefix(shape, k, seed=0):
-    """Farthest-point landmarks: the first k samples (FPS order, the paper's start)."""
-    idx = list(range(min(k, shape.n_samples)))
-    return dict(sample_indices=idx, scores=None)
+def landmark_method(name: str):
+    """Callable ``(shape, k, seed) -> dict(sample_indices, scores)`` for a method name."""
+    from shapecond.landmarks import METHODS, select_landmarks
 
+    if name not in METHODS:
+        raise InputError(f"unknown landmark method {name!r} (choose from {', '.join(METHODS)})")
 
-def _from_package(method):
     def select(shape, k, seed=0):
-        from shapecond.landmarks import select_landmarks
-
-        res = select_landmarks(shape, k, method, seed=seed)
-        idx = getattr(res, "sample_indices", None)
-        if idx is None or len(idx) == 0:
-            idx = shape.landmark_indices(res.landmarks)
-        scores = getattr(res, "scores", None)
-        return dict(sample_indices=[int(i) for i in idx], scores=scores)
+        res = select_landmarks(shape, k, name, seed=seed)
+        return dict(sample_indices=[int(i) for i in res.sample_indices], scores=res.scores)
 
     return select
-
-
-def landmark_method(name: str):
-    """Callable ``(shape, k, seed) -> dict(sample_indices, scores)`` for a method name.
-
-    Uses ``shapecond.landmarks.select_landmarks`` when it exists; FPS falls back
-    to the prefix of the metric shape's FPS order.
-    """
-    try:
-        from shapecond.landmarks import select_landmarks  # noqa: F401
-        return _from_package(name)
-    except ImportError:
-        if name == "fps":
-            return _fps_prefix
-        raise InputError(f"landmark method {name!r} is not available "
-                         "(shapecond.landmarks.select_landmarks is missing)") from None
 
 
 def symmetry_score(D, n_samples, landmarks, seed=0, quick=False) -> float:
     """σ with the given sample indices fixed (Eq. 5): the lower bound with witness.
 
-    ``shapecond.symmetry.score.symmetry_score`` (no exact solve, no LP: at
+    ``shapecond.symmetry.score.symmetry_score`` without exact solve or LP (at
     N = 400 only the witness search's lower bound is affordable), with
-    ``effort="quick"`` when ``quick``; the bare witness search if that module
-    is missing.
+    ``effort="quick"`` when ``quick``.
     """
-    effort = "quick" if quick else "default"
-    try:
-        from shapecond.symmetry.score import symmetry_score as score
-    except ImportError:
-        score = None
-    if score is not None:
-        res = score(D, n_samples, list(landmarks), exact=False, upper=False, seed=seed,
-                    effort=effort)
-        return float(res.sigma_lower)
-    from shapecond.symmetry.search import witness_search
+    from shapecond.symmetry.score import symmetry_score as score
 
-    return float(witness_search(D, n_samples, list(landmarks), seed=seed, effort=effort).sigma)
+    res = score(D, n_samples, list(landmarks), exact=False, upper=False, seed=seed,
+                effort="quick" if quick else "default")
+    return float(res.sigma_lower)
 
 
 def swap_floor(D, n_samples, landmarks) -> float:
-    """σ of the best single swap avoiding the landmarks (DESIGN.md 1, "Floor")."""
+    """σ of the best single swap avoiding the landmarks."""
     from shapecond.symmetry.search import best_single_swap
 
     return float(best_single_swap(D, n_samples, list(landmarks))[0])
@@ -204,7 +174,7 @@ class MatchRecord:
               "sample_error", "exact", "recall", "objective_ratio", "seconds")
 
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in self.FIELDS}
+        return jsonable({k: getattr(self, k) for k in self.FIELDS})
 
 
 def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_points, seed,
@@ -273,19 +243,15 @@ def target_task(cls, null_path, target_path, landmark_sets, counts, matchers, n_
 
 def off_vertex_count(path: Path) -> int | None:
     """Vertex count from an OFF header without reading the mesh (None if not OFF)."""
+    from shapecond.shapes.formats import check_file, off_header
+
     if path.suffix.lower() != ".off":
         return None
-    with open(path) as fh:
-        tokens = []
-        for line in fh:
-            line = line.split("#")[0].strip()
-            if line:
-                tokens += line.split()
-            if len(tokens) >= 2:
-                break
-    head = tokens[0]
-    rest = head[3:] if head.upper().startswith("OFF") and len(head) > 3 else None
-    return int(rest if rest else tokens[1])
+    check_file(path)
+    with open(path, "rb") as fh:
+        head = fh.read(4096).decode("latin-1")
+    lines = [ln.split("#", 1)[0].split() for ln in head.splitlines()[:-1] or head.splitlines()]
+    return off_header([ln for ln in lines if ln], path.name)[0]
 
 
 def prepare_task(path, n_points, seed, backend, cache, with_metric=False, null_path=None,
@@ -325,24 +291,18 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
     search, default ε) after 1, 3 and k landmarks, made non-increasing (a map
     fixing more landmarks is feasible with fewer).
     """
-    import json
-
-    from shapecond.shapes.io import atomic_write, load_geometry
-    from shapecond.shapes.metric import cache_dir, metric_shape
+    from shapecond import cache as disk
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
 
     st = Path(null_path).stat()
-    key = hashlib.sha256(repr((LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size,
-                               st.st_mtime_ns, method, k, n_points, seed, backend, quick)
-                              ).encode()).hexdigest()[:32]
-    path = Path(cache_dir()) / f"landmarks-{key}.json"
-    if cache and path.exists():
-        try:
-            d = json.loads(path.read_text())
-            for key in ("scores", "floor", "scale"):
-                d[key] = {int(c): float(v) for c, v in d[key].items()}
-            return d
-        except (ValueError, KeyError):
-            path.unlink(missing_ok=True)
+    key = disk.key_of(LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size, st.st_mtime_ns,
+                      method, k, n_points, seed, backend, quick)
+    d = disk.load_json("landmarks", key, _check_landmark_entry) if cache else None
+    if d is not None:
+        for name in ("scores", "floor", "scale"):
+            d[name] = {int(c): float(v) for c, v in d[name].items()}
+        return d
     t0 = time.perf_counter()
     shape = metric_shape(load_geometry(null_path), n_points, backend=backend, seed=seed, cache=cache)
     sel = landmark_method(method)(shape, k, seed)
@@ -362,14 +322,45 @@ def landmark_task(cls, null_path, method, k, n_points, seed, backend, cache, qui
                ids=[int(v) for v in shape.sample_ids[idx]], scores=scores, floor=floor, scale=scale,
                seconds=seconds, score_source="search")
     if cache:
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            with atomic_write(path) as tmp:
-                # json writes inf as Infinity, which json.loads reads back
-                Path(tmp).write_text(json.dumps(out))
-        except OSError:
-            pass
+        disk.save_json("landmarks", key, {**out, "scores": {c: _json_float(v) for c, v in scores.items()},
+                                          "floor": {c: _json_float(v) for c, v in floor.items()}})
     return out
+
+
+def _json_float(v: float):
+    return "inf" if v == math.inf else v
+
+
+def _check_landmark_entry(d) -> None:
+    """Refuse a cached landmark selection that does not have the expected fields."""
+    for name in ("cls", "method", "vertices", "ids", "scores", "floor", "seconds"):
+        if name not in d:
+            raise InputError(f"field {name!r} is missing")
+    if len(d["vertices"]) != len(d["ids"]) or not all(isinstance(v, int) and v >= 0 for v in d["vertices"]):
+        raise InputError("its landmark vertices are not vertex indices")
+
+
+def _check_evaluation_cost(plan, n_points, backend, methods, matchers, n_jobs, force) -> None:
+    """Refuse (or warn about) an evaluation estimated beyond ``shapecond.limits``.
+
+    Per shape: its geodesics; per class and method: about 4 witness searches per
+    CNBS landmark and 3 searches for the scores; per matching about one second at
+    N = 400, growing like N³ (measured on TOSCA, benchmarks/RESULTS.md).
+    """
+    from shapecond.limits import cap_jobs, check_cost, geodesic_seconds, search_seconds
+
+    total, n_shapes, n_matchings = 0.0, 0, 0
+    for null, targets, k in plan.values():
+        n = off_vertex_count(null) or 50_000
+        total += (1 + len(targets)) * geodesic_seconds(n, 2 * n_points, backend)
+        for m in methods:
+            total += search_seconds(n_points, n_points, 3 + (4 * k if m == "cnbs" else 0))
+        n_shapes += 1 + len(targets)
+        n_matchings += len(targets) * len(methods) * 2 * len(matchers)
+    total += n_matchings * (n_points / 400.0) ** 3
+    jobs = cap_jobs(n_jobs, n_shapes)
+    check_cost(f"the evaluation ({n_shapes} shapes, {n_matchings} matchings, N = {n_points}, {jobs} jobs)",
+               total / jobs, force=force)
 
 
 @dataclass
@@ -381,16 +372,26 @@ class Evaluation:
     settings: dict
     seconds: dict = field(default_factory=dict)
 
+    def to_dict(self) -> dict:
+        """Settings, timings, landmarks and one row per matching, as JSON-ready values."""
+        return jsonable(dict(settings=self.settings, seconds=self.seconds, landmarks=self.landmarks,
+                             records=[r.to_dict() for r in self.records]))
+
+    def __repr__(self) -> str:
+        return (f"Evaluation({len(self.settings.get('classes', []))} classes, {len(self.records)} matchings, "
+                f"methods {self.settings.get('methods')}, matchers {self.settings.get('matchers')})")
+
 
 def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "cnbs", "cnbs-scale"),
                      matchers=("lh05", "faq"), n_jobs=1, scheduler=None, quick=False,
                      n_points=None, seed=0, backend="heat", cache=True, progress=False,
-                     max_targets=None, protocol="corresponding") -> Evaluation:
+                     max_targets=None, protocol="corresponding", force=False) -> Evaluation:
     """Run the Figure 7 evaluation on every class folder of ``dataset_dir``.
 
     ``protocol``: ``"corresponding"``, ``"independent"`` (module docstring) or
     ``"both"``.  ``quick``: classes default to wolf and centaur (or the first
     two), at most 2 targets per class, N = 200 and the quick score search.
+    ``force``: run even when the estimated time is beyond ``shapecond.limits``.
 
     Phases: the null shapes' geodesics; then the targets' geodesics together
     with the landmark selections (they depend only on the null shapes); then
@@ -417,6 +418,7 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
                              f"({', '.join(f'{k}: {v}' for k, v in counts.items())})")
         plan[cls] = (paths[0], paths[1:][:max_targets] if max_targets else paths[1:],
                      PAPER_LANDMARKS.get(cls, DEFAULT_LANDMARKS))
+    _check_evaluation_cost(plan, n_points, backend, methods, matchers, n_jobs, force)
     common = (n_points, seed, backend, cache)
     timing = {}
     t0 = time.perf_counter()

@@ -13,7 +13,6 @@ score against error.
 
 from __future__ import annotations
 
-import json
 import math
 from collections import defaultdict
 from dataclasses import replace
@@ -203,10 +202,12 @@ def plot(ev, out_dir) -> list[Path]:
 
 
 def _plot(ev, protocol, out_dir) -> list[Path]:
-    import matplotlib
+    """One protocol's cumulative error curves and score-vs-error scatter.
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    Figures are built without pyplot (``viz.render.new_figure``), so the caller's
+    matplotlib backend is never changed; each PNG is written atomically.
+    """
+    from shapecond.viz.render import new_figure, save_figure
 
     out_dir = Path(out_dir)
     paths = []
@@ -215,7 +216,8 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
         classes = st["classes"]
         cols = min(4, len(classes))
         rows = math.ceil(len(classes) / cols)
-        fig, axes = plt.subplots(rows, cols, figsize=(4 * cols, 3.2 * rows), squeeze=False)
+        fig = new_figure(figsize=(4 * cols, 3.2 * rows))
+        axes = fig.subplots(rows, cols, squeeze=False)
         for ax, cls in zip(axes.ravel(), classes):
             by = defaultdict(list)
             for r in ev.records:
@@ -233,12 +235,12 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
         fig.tight_layout()
         fig.suptitle(f"{protocol} samples, {matcher}")
         p = out_dir / f"error_curves_{protocol}_{matcher}.png"
-        fig.savefig(p, dpi=90)
-        plt.close(fig)
+        save_figure(fig, p, dpi=90, bbox_inches=None)
         paths.append(p)
     scores = score_table(ev.landmarks)
     errs = mean_errors(ev.records)
-    fig, ax = plt.subplots(figsize=(5, 4))
+    fig = new_figure(figsize=(5, 4))
+    ax = fig.subplots()
     for matcher, marker in zip(st["matchers"], "os^"):
         for m in st["methods"]:
             xs, ys = [], []
@@ -255,8 +257,7 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
     fig.tight_layout()
     ax.set_title(f"{protocol} samples")
     p = out_dir / f"score_vs_error_{protocol}.png"
-    fig.savefig(p, dpi=90)
-    plt.close(fig)
+    save_figure(fig, p, dpi=90, bbox_inches=None)
     return paths + [p]
 
 
@@ -273,32 +274,13 @@ def correlations(ev) -> dict:
 
 def write_report(ev, out_dir) -> Path:
     """Write report.md, results.json and the PNGs into ``out_dir``; return the report path."""
-    from shapecond.shapes.io import atomic_write
+    from shapecond.jsonable import dumps
+    from shapecond.output import write_text
 
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     plots = plot(ev, out_dir)
-    path = out_dir / "report.md"
-    with atomic_write(path) as tmp:
-        Path(tmp).write_text(markdown(ev, plots))
-    data = dict(settings=ev.settings, seconds=ev.seconds, landmarks=ev.landmarks,
-                records=[r.to_dict() for r in ev.records],
-                correlation=correlations(by_protocol(ev, protocols(ev)[0])),
+    path = write_text(out_dir / "report.md", markdown(ev, plots))
+    data = dict(ev.to_dict(), correlation=correlations(by_protocol(ev, protocols(ev)[0])),
                 correlation_by_protocol={p: correlations(by_protocol(ev, p)) for p in protocols(ev)})
-    with atomic_write(out_dir / "results.json") as tmp:
-        Path(tmp).write_text(json.dumps(_plain(data), indent=1, allow_nan=False))
+    write_text(out_dir / "results.json", dumps(data, indent=1))
     return path
-
-
-def _plain(o):
-    """JSON-safe copy: inf -> "inf", nan -> null, numpy -> Python."""
-    if isinstance(o, dict):
-        return {str(k): _plain(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_plain(v) for v in o]
-    if isinstance(o, (np.integer,)):
-        return int(o)
-    if isinstance(o, (float, np.floating)):
-        v = float(o)
-        return None if math.isnan(v) else ("inf" if v == math.inf else ("-inf" if v == -math.inf else v))
-    return o

@@ -18,18 +18,16 @@ raw sample diameter for point clouds.
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
+from shapecond import cache as disk
 from shapecond.errors import InputError
 from shapecond.shapes.geodesics import DistanceSolver
 from shapecond.shapes.geometry import Geometry
-from shapecond.shapes.metric import cache_dir
 from shapecond.shapes.sampling import farthest_point_sampling
-from shapecond.shapes.validate import face_areas
+from shapecond.shapes.validate import face_areas, unit_length
 
 CACHE_VERSION = "matching-rows-2"
 
@@ -78,10 +76,11 @@ class SampledSurface:
 
 def surface_unit(geometry: Geometry, raw_diameter: float) -> float:
     """``sqrt(total area)`` for a mesh, ``raw_diameter`` for a point cloud."""
-    if geometry.faces is not None:
-        area = float(face_areas(geometry.vertices, geometry.faces).sum())
+    if geometry.faces is not None:  # area of the shape scaled to unit size: no overflow at any scale
+        size = unit_length(geometry.vertices)
+        area = float(face_areas(geometry.vertices / size, geometry.faces).sum()) if size > 0 else 0.0
         if area > 0:
-            return float(np.sqrt(area))
+            return float(np.sqrt(area)) * size
     if not raw_diameter > 0:
         raise InputError(f"{geometry.name}: zero diameter")
     return float(raw_diameter)
@@ -125,14 +124,6 @@ class CachedSolver:
         return np.stack([self._rows[s] for s in sources]) if sources else np.empty((0, self.n))
 
 
-def _key(geometry: Geometry, n_points: int, backend: str, seed: int, landmarks) -> str:
-    h = hashlib.sha256()
-    for arr in (geometry.vertices, geometry.faces, geometry.ids):
-        h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
-    h.update(repr((CACHE_VERSION, n_points, backend, seed, tuple(landmarks))).encode())
-    return h.hexdigest()[:32]
-
-
 def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat", seed: int = 0,
                    landmarks=(), cache: bool = True, solver: DistanceSolver | None = None
                    ) -> SampledSurface:
@@ -156,20 +147,20 @@ def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat
         raise InputError(f"{geometry.name} has {geometry.n_vertices} vertices, fewer than the "
                          f"{n_points} samples requested")
     landmarks = tuple(int(v) for v in landmarks)
-    path = Path(cache_dir()) / f"matching-{_key(geometry, n_points, backend, seed, landmarks)}.npz"
-    if cache and path.exists():
-        try:
-            with np.load(path) as z:
-                return SampledSurface(geometry, z["samples"], z["rows"], float(z["unit"]), backend)
-        except Exception:
-            path.unlink(missing_ok=True)
+    key = disk.key_of(CACHE_VERSION, geometry.vertices, geometry.faces, geometry.ids, n_points, backend, seed,
+                      landmarks)
+    n = geometry.n_vertices
+    z = disk.load_arrays("matching", key, {"samples": (n_points,), "rows": (n_points, n), "unit": ()},
+                         lambda a: _check_entry(a, n, landmarks)) if cache else None
+    if z is not None:
+        return SampledSurface(geometry, z["samples"].astype(np.int64), z["rows"], float(z["unit"]), backend)
     rec = _RecordingSolver(solver if solver is not None else DistanceSolver(geometry, backend))
     fps = farthest_point_sampling(rec, n_points, landmarks=landmarks, seed=seed)
     rows = np.stack([rec.kept[int(s)] for s in fps.samples])
     surf = SampledSurface(geometry, fps.samples, rows, surface_unit(geometry, float(rows.max())),
                           backend)
     if cache:
-        _save(path, surf)
+        disk.save_arrays("matching", key, {"samples": surf.samples, "rows": surf.rows, "unit": surf.unit})
     return surf
 
 
@@ -184,20 +175,22 @@ def surface_at(geometry: Geometry, vertices, backend: str = "heat", cache: bool 
     vertices = np.asarray(vertices, dtype=np.int64).reshape(-1)
     if vertices.size and (vertices.min() < 0 or vertices.max() >= geometry.n_vertices):
         raise InputError(f"sample vertex out of range 0..{geometry.n_vertices - 1} on {geometry.name}")
-    key = _key(geometry, int(vertices.size), backend, -1, ("at",) + tuple(vertices.tolist()))
-    path = Path(cache_dir()) / f"matching-{key}.npz"
-    if cache and path.exists():
-        try:
-            with np.load(path) as z:
-                if np.array_equal(z["samples"], vertices):
-                    return SampledSurface(geometry, z["samples"], z["rows"], float(z["unit"]), backend)
-        except Exception:
-            path.unlink(missing_ok=True)
+    key = disk.key_of(CACHE_VERSION, geometry.vertices, geometry.faces, geometry.ids, backend, "at", vertices)
+    k, n = int(vertices.size), geometry.n_vertices
+
+    def check(a):
+        if not np.array_equal(a["samples"], vertices):
+            raise InputError("its samples are not these vertices")
+        _check_entry(a, n, ())
+
+    z = disk.load_arrays("matching", key, {"samples": (k,), "rows": (k, n), "unit": ()}, check) if cache else None
+    if z is not None:
+        return SampledSurface(geometry, vertices, z["rows"], float(z["unit"]), backend)
     solver = solver if solver is not None else DistanceSolver(geometry, backend)
     rows = solver.distances(vertices).astype(np.float32)
     surf = SampledSurface(geometry, vertices, rows, surface_unit(geometry, float(rows.max())), backend)
     if cache:
-        _save(path, surf)
+        disk.save_arrays("matching", key, {"samples": surf.samples, "rows": surf.rows, "unit": surf.unit})
     return surf
 
 
@@ -241,16 +234,15 @@ def carry_samples(source: SampledSurface, target: Geometry, solver=None, seed: i
     return surf, truth
 
 
-def _save(path: Path, surf: SampledSurface) -> None:
-    from shapecond.shapes.io import atomic_write
-
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_write(path) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez(fh, samples=surf.samples, rows=surf.rows, unit=surf.unit)
-    except OSError:
-        pass  # an unwritable cache only costs time
+def _check_entry(a: dict, n: int, landmarks) -> None:
+    """Refuse cached rows that cannot belong to this shape (checked on every read)."""
+    s, rows = a["samples"], a["rows"]
+    if s.min() < 0 or s.max() >= n or np.unique(s).size != s.size or tuple(s[:len(landmarks)]) != landmarks:
+        raise InputError("its samples are not distinct vertices starting with the landmarks")
+    if not (np.all(np.isfinite(rows)) and rows.min() >= 0 and np.isfinite(a["unit"]) and a["unit"] > 0):
+        raise InputError("its distances are not finite and non-negative")
+    if np.any(rows[np.arange(s.size), s] != 0):
+        raise InputError("its rows do not start at their samples")
 
 
 def insert_landmarks(surface: SampledSurface, landmarks, solver: DistanceSolver | None = None):

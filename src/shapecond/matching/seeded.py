@@ -1,4 +1,4 @@
-"""Seeded graph matching: FAQ with the landmarks as seeds (DESIGN.md section 3).
+"""Seeded graph matching: FAQ with the landmarks as seeds.
 
 The second matcher, so users see whether good landmarks still help a modern
 quadratic-assignment solver.  ``scipy.optimize.quadratic_assignment`` with

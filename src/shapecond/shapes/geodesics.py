@@ -16,6 +16,8 @@ Backends:
 ``euclidean``  straight-line distances in R^3.
 
 Every result records the backend that produced it (``DistanceSolver.backend``).
+Solvers work on the shape scaled to a unit bounding-box diagonal and scale the
+distances back, so the same mesh in any unit gives the same (scaled) result.
 """
 
 from __future__ import annotations
@@ -24,8 +26,11 @@ import numpy as np
 
 from ..errors import InputError
 from .geometry import Geometry
+from .validate import unit_length
 
 BACKENDS = ("heat", "fmm", "exact", "euclidean")
+#: potpourri3d's point-cloud solver builds a 30-nearest-neighbour graph.
+MIN_CLOUD_POINTS = 31
 
 
 class DistanceSolver:
@@ -53,7 +58,9 @@ class DistanceSolver:
         self.geometry = geometry
         self.backend = backend
         self.n = geometry.n_vertices
-        V = np.ascontiguousarray(geometry.vertices, dtype=np.float64)
+        self.unit = unit_length(geometry.vertices) or 1.0
+        V = (geometry.vertices - geometry.vertices.mean(axis=0)) / self.unit
+        V = np.ascontiguousarray(V, dtype=np.float64)
         F = None if geometry.faces is None else np.ascontiguousarray(geometry.faces, dtype=np.int64)
         self._V, self._sqnorm = V, np.einsum("ij,ij->i", V, V)
         self._rows = None  # a function computing many rows at once, when the backend has one
@@ -78,7 +85,14 @@ class DistanceSolver:
         if F is None:
             if backend != "heat":
                 raise InputError(f"the {backend} backend needs a mesh; point clouds use the heat backend")
-            solver = pp3d.PointCloudHeatSolver(V)
+            if self.n < MIN_CLOUD_POINTS:
+                raise InputError(f"{geometry.name}: geodesics on a point cloud need at least {MIN_CLOUD_POINTS} "
+                                 f"points, got {self.n} (use --metric euclidean)")
+            try:
+                solver = pp3d.PointCloudHeatSolver(V)
+            except RuntimeError as exc:  # geometry-central refuses clouds it cannot mesh locally
+                raise InputError(f"{geometry.name}: the point cloud has no usable local surface "
+                                 f"({str(exc).splitlines()[0][-80:]})") from None
             self._one = lambda s: np.asarray(solver.compute_distance(int(s)), dtype=np.float64)
         elif backend == "heat":
             solver = pp3d.MeshHeatMethodDistanceSolver(V, F)
@@ -107,15 +121,17 @@ class DistanceSolver:
         if not np.all(np.isfinite(out)):
             raise InputError(f"{self.geometry.name}: the {self.backend} backend returned non-finite "
                              "distances (is the mesh broken or disconnected?)")
+        out *= self.unit  # computed on the shape scaled to unit size
         np.maximum(out, 0.0, out=out)
         out[np.arange(sources.size), sources] = 0.0
         return out
 
     def guess(self, source: int) -> np.ndarray:
-        """Straight-line distances from ``source`` (a lower bound of the geodesic ones), shape (n,)."""
+        """Straight-line distances from ``source`` (a lower bound of the geodesic ones), shape (n),
+        in the units of ``distances``."""
         s = int(source)
         d2 = self._sqnorm + self._sqnorm[s] - 2.0 * (self._V @ self._V[s])
-        return np.sqrt(np.maximum(d2, 0.0, out=d2), out=d2)
+        return self.unit * np.sqrt(np.maximum(d2, 0.0, out=d2), out=d2)
 
 
 def _exact_solver(V: np.ndarray, F: np.ndarray):

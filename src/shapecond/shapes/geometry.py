@@ -1,9 +1,9 @@
 """The ``Geometry`` type: a triangle mesh or a point cloud with the file's vertex ids.
 
 Every id a user sees is the id in *their* file.  Internally, unreferenced
-vertices of a mesh are dropped (they break Laplacians and geodesics, DESIGN.md
-section 4) and vertices are renumbered ``0..n-1``; ``ids[i]`` is the file's id
-of internal vertex ``i``.
+vertices of a mesh are dropped (they break Laplacians and geodesics) and
+vertices are renumbered ``0..n-1``; ``ids[i]`` is the file's id of internal
+vertex ``i``.
 """
 
 from __future__ import annotations
@@ -85,8 +85,13 @@ class Geometry:
 
 
 def make_geometry(vertices, faces=None, name="shape", symmetry=None) -> Geometry:
-    """Build a ``Geometry`` from arrays whose vertices are all referenced (ids = 0..n-1)."""
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    f = None if faces is None else np.ascontiguousarray(faces, dtype=np.int64)
-    sym = None if symmetry is None else np.asarray(symmetry, dtype=np.int64)
-    return Geometry(v, f, np.arange(v.shape[0], dtype=np.int64), name, sym)
+    """A validated ``Geometry`` from arrays; ids are the row indices of ``vertices``.
+
+    Validation is that of a file (``validate.clean_mesh``): unreferenced vertices
+    are dropped (their ids kept), a broken mesh raises ``InputError``.
+    ``symmetry`` gives the mirror row of each row.
+    """
+    from .validate import clean_mesh
+
+    g = clean_mesh(vertices, faces, name)
+    return g if symmetry is None else g.with_symmetry(np.asarray(symmetry, dtype=np.int64))

@@ -1,33 +1,34 @@
 """The metric shape of the paper: N samples with their distance matrix, diameter 1.
 
 ``MetricShape.D`` is an (M, M) matrix over a point set Y whose first N points are
-the samples X (DESIGN.md section 1).  With ``target="samples"`` (the paper) M = N
-and maps are bijections of X; with ``target="dense"`` (issue 4) Y holds
-M = factor x N farthest-point samples with X as its prefix, so that the mirror
-image of a sample can be matched to a nearby target instead of another sample.
+the samples X.  With ``target="samples"`` (the paper) M = N and maps are
+bijections of X; with ``target="dense"`` Y holds M = factor x N farthest-point
+samples with X as its prefix, so that the mirror image of a sample can be
+matched to a nearby target instead of another sample.
 
 Building a metric shape from a mesh is the slow step (one geodesic solve per
-point of Y), so results are cached on disk, keyed by a hash of the geometry and
-of every parameter; ``cache=False`` disables it.  The cache folder is
-``$SHAPECOND_CACHE`` or ``~/.cache/shapecond``.
+point of Y), so results are cached on disk (``shapecond.cache``), keyed by a
+hash of the geometry and of every parameter, and checked when read;
+``cache=False`` disables it.  The cost is estimated first
+(``shapecond.limits``): work beyond the limits needs ``force=True``.
 """
 
 from __future__ import annotations
 
-import hashlib
-import os
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
+from .. import cache as disk
+from ..cache import cache_dir  # noqa: F401  (the cache folder, long imported from here)
+from ..checks import check_distance_matrix, check_int, check_seed
 from ..errors import InputError
+from ..limits import check_cost, geodesic_seconds, metric_bytes
 from .geodesics import BACKENDS, DistanceSolver
 from .geometry import Geometry
 from .sampling import farthest_point_sampling
-from .validate import check_distance_matrix
 
-CACHE_VERSION = "2"  # 2: heat distances from shapes.heat (blocks), same as potpourri3d to round-off
+CACHE_VERSION = "3"  # 2: checked entries; 3: heat distances from shapes.heat (blocks), as potpourri3d to round-off
 TARGETS = ("samples", "dense")
 
 
@@ -90,7 +91,7 @@ class MetricShape:
 
 def metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "geodesic", backend: str = "heat",
                  seed: int = 0, landmarks=(), target: str = "samples", target_factor: int = 8,
-                 cache: bool = True, progress: bool = False) -> MetricShape:
+                 cache: bool = True, progress: bool = False, force: bool = False) -> MetricShape:
     """Sample a mesh or point cloud into a ``MetricShape`` (landmarks first, FPS order).
 
     Parameters
@@ -103,6 +104,7 @@ def metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "geodesi
     landmarks : internal vertex indices placed first.
     target : "samples" or "dense"; ``target_factor`` gives M = factor x N for dense
         targets (capped at the vertex count).
+    force : run even when the estimated time or memory is beyond ``shapecond.limits``.
     """
     if metric not in ("geodesic", "euclidean"):
         raise InputError(f"unknown metric {metric!r}; choose geodesic or euclidean")
@@ -112,35 +114,51 @@ def metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "geodesi
         raise InputError(f"unknown geodesic backend {backend!r}; choose heat, fmm or exact")
     if target not in TARGETS:
         raise InputError(f"unknown target {target!r}; choose samples or dense")
-    if n_points < 3:
-        raise InputError(f"at least 3 points are needed, got {n_points}")
+    n_points = check_int(n_points, "n_points", lo=3)
     if n_points > geometry.n_vertices:
         raise InputError(f"{geometry.name} has {geometry.n_vertices} vertices, fewer than the "
                          f"{n_points} samples requested")
-    if target_factor < 1:
-        raise InputError("--target-factor must be at least 1")
-    m = n_points if target == "samples" else min(n_points * int(target_factor), geometry.n_vertices)
+    target_factor = check_int(target_factor, "target_factor", lo=1, hi=1000)
+    seed = check_seed(seed)
+    m = n_points if target == "samples" else min(n_points * target_factor, geometry.n_vertices)
     landmarks = tuple(int(v) for v in landmarks)
-    key = _cache_key(geometry, n_points, m, backend, seed, landmarks)
-    path = _cache_path(key) if cache else None
-    if path is not None and path.exists():
-        try:
-            with np.load(path) as z:
-                return MetricShape(z["D"], n_points, z["samples"], geometry, metric, backend, target,
-                                   float(z["scale"]), z["nearest"], float(z["covering_radius"]))
-        except Exception:
-            path.unlink(missing_ok=True)  # a damaged cache entry is recomputed
+    key = disk.key_of(CACHE_VERSION, geometry.vertices, geometry.faces, geometry.ids, geometry.symmetry,
+                      n_points, m, backend, seed, landmarks)
+    shapes = {"D": (m, m), "samples": (m,), "scale": (), "nearest": (geometry.n_vertices,), "covering_radius": ()}
+    z = disk.load_arrays("metric", key, shapes, lambda a: _check_entry(a, geometry, landmarks)) if cache else None
+    if z is not None:
+        return MetricShape(check_distance_matrix(z["D"]), n_points, z["samples"].astype(np.int64), geometry,
+                           metric, backend, target, float(z["scale"]), z["nearest"].astype(np.int64),
+                           float(z["covering_radius"]))
+    check_cost(f"sampling {m} points of {geometry.name} ({geometry.n_vertices} vertices, {backend} distances)",
+               geodesic_seconds(geometry.n_vertices, m, backend), metric_bytes(m, geometry.n_vertices), force)
     solver = DistanceSolver(geometry, backend)
     fps = farthest_point_sampling(solver, m, landmarks=landmarks, seed=seed, symmetry=geometry.symmetry,
                                   stops=(n_points,), progress=progress)
     scale = float(fps.D.max())
     if not scale > 0:
         raise InputError(f"{geometry.name}: zero diameter")
-    shape = MetricShape(fps.D / scale, n_points, fps.samples, geometry, metric, backend, target, scale,
+    D = check_distance_matrix(fps.D / scale, geometry.name)
+    shape = MetricShape(D, n_points, fps.samples, geometry, metric, backend, target, scale,
                         fps.nearest, float(fps.min_dist.max() / scale))
-    if path is not None:
-        _save(path, shape)
+    if cache:
+        disk.save_arrays("metric", key, {"D": shape.D, "samples": shape.samples, "scale": shape.scale,
+                                         "nearest": shape.nearest, "covering_radius": shape.covering_radius})
     return shape
+
+
+def _check_entry(a: dict, geometry: Geometry, landmarks) -> None:
+    """Refuse a cache entry whose content cannot be this shape's (checked on every read)."""
+    samples, n = a["samples"], geometry.n_vertices
+    if samples.size and (samples.min() < 0 or samples.max() >= n or np.unique(samples).size != samples.size):
+        raise InputError("its samples are not distinct vertices of the shape")
+    if tuple(int(v) for v in samples[:len(landmarks)]) != tuple(landmarks):
+        raise InputError("its samples do not start with the landmarks")
+    if not (np.isfinite(a["scale"]) and a["scale"] > 0 and abs(float(np.max(a["D"])) - 1.0) < 1e-9):
+        raise InputError("its distances are not scaled to diameter 1")
+    if a["nearest"].size and (a["nearest"].min() < 0 or a["nearest"].max() >= samples.size):
+        raise InputError("its nearest-point map is out of range")
+    check_distance_matrix(a["D"])
 
 
 def from_distance_matrix(D: np.ndarray, landmarks=(), name: str = "matrix") -> MetricShape:
@@ -148,12 +166,13 @@ def from_distance_matrix(D: np.ndarray, landmarks=(), name: str = "matrix") -> M
 
     Landmarks (row indices) are moved to the front; the other rows keep their order.
     """
-    D = check_distance_matrix(D, name)
+    D = check_distance_matrix(D, name, min_points=3, distinct=True)
     n = D.shape[0]
     landmarks = [int(v) for v in landmarks]
     order = np.asarray(landmarks + [i for i in range(n) if i not in set(landmarks)], dtype=np.int64)
     scale = float(D.max())
-    return MetricShape(D[np.ix_(order, order)] / scale, n, order, None, "given", None, "samples", scale)
+    return MetricShape(check_distance_matrix(D[np.ix_(order, order)] / scale, name), n, order, None, "given",
+                       None, "samples", scale)
 
 
 def restrict_targets(shape: MetricShape, n_targets: int) -> MetricShape:
@@ -165,32 +184,3 @@ def restrict_targets(shape: MetricShape, n_targets: int) -> MetricShape:
     k = max(shape.n_samples, min(int(n_targets), shape.n_targets))
     return replace(shape, D=shape.D[:k, :k], samples=shape.samples[:k], nearest=None, covering_radius=None,
                    target="samples" if k == shape.n_samples else shape.target)
-
-
-def _cache_key(geometry: Geometry, n_points: int, m: int, backend: str, seed: int, landmarks) -> str:
-    h = hashlib.sha256()
-    for arr in (geometry.vertices, geometry.faces, geometry.ids, geometry.symmetry):
-        h.update(b"none" if arr is None else np.ascontiguousarray(arr).tobytes())
-    h.update(repr((CACHE_VERSION, n_points, m, backend, seed, landmarks)).encode())
-    return h.hexdigest()[:32]
-
-
-def cache_dir() -> Path:
-    return Path(os.environ.get("SHAPECOND_CACHE", Path.home() / ".cache" / "shapecond"))
-
-
-def _cache_path(key: str) -> Path:
-    return cache_dir() / f"metric-{key}.npz"
-
-
-def _save(path: Path, shape: MetricShape) -> None:
-    from .io import atomic_write
-
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_write(path) as tmp:
-            with open(tmp, "wb") as fh:
-                np.savez(fh, D=shape.D, samples=shape.samples, scale=shape.scale, nearest=shape.nearest,
-                         covering_radius=shape.covering_radius)
-    except OSError:
-        pass  # an unwritable cache only costs time

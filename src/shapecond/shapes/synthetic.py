@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from ..errors import InputError
+from ..checks import check_float, check_int, check_seed
+from ..errors import InputError, TooLargeError
 from .geometry import Geometry, make_geometry
 
 
@@ -155,8 +156,6 @@ def animal(delta: float = 0.0, resolution: float = 0.03) -> Geometry:
     """
     from skimage.measure import marching_cubes
 
-    if not (resolution > 0):
-        raise InputError("animal resolution must be positive")
     h = float(resolution)
     lo = np.array([0.0, -1.0, -1.3])
     hi = np.array([0.5, 0.85, 1.3])
@@ -165,7 +164,7 @@ def animal(delta: float = 0.0, resolution: float = 0.03) -> Geometry:
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     field = _animal_field(grid).reshape(counts)
     field[np.abs(field) < 1e-9] = 1e-9  # keep the level set off the grid nodes
-    verts, faces, _, _ = marching_cubes(field, level=0.0, spacing=(h, h, h))
+    verts, faces, _, _ = marching_cubes(field, level=0.0, spacing=(h, h, h), allow_degenerate=False)
     verts = verts + lo
     on_plane = np.abs(verts[:, 0]) < 1e-12
     verts[on_plane, 0] = 0.0
@@ -208,14 +207,59 @@ GENERATORS = {
     "plane": plane_patch,
 }
 
+_POS = dict(lo=0.0, lo_open=True)
+#: Allowed values of every generator parameter: (kind, range) with kind "int",
+#: "float" or "seed".  Ranges keep the shape a valid, connected surface.
+PARAMETERS = {
+    "animal": {"delta": ("float", dict(lo=-0.5, hi=1.0)), "resolution": ("float", dict(lo=0.01, hi=0.08))},
+    "sphere": {"subdivisions": ("int", dict(lo=0, hi=8)), "radius": ("float", _POS)},
+    "torus": {"major": ("float", _POS), "minor": ("float", _POS),
+              "n_major": ("int", dict(lo=3, hi=4096)), "n_minor": ("int", dict(lo=3, hi=4096))},
+    "cylinder": {"radius": ("float", _POS), "height": ("float", _POS), "sections": ("int", dict(lo=3, hi=4096)),
+                 "n_height": ("int", dict(lo=1, hi=4096)), "n_cap_rings": ("int", dict(lo=2, hi=1024))},
+    "blob": {"subdivisions": ("int", dict(lo=0, hi=8)), "seed": ("seed", {}),
+             "amplitude": ("float", dict(lo=0.0, hi=100.0)), "n_bumps": ("int", dict(lo=0, hi=1000))},
+    "plane": {"n": ("int", dict(lo=2, hi=4096)), "size": ("float", _POS)},
+}
+#: Generated shapes above this many vertices are refused unless forced.
+MAX_GENERATED_VERTICES = 700_000
 
-def generate(name: str, **params) -> Geometry:
-    """Build a generated shape by name (``demo:NAME`` on the command line)."""
-    try:
-        fn = GENERATORS[name]
-    except KeyError:
-        raise InputError(f"unknown generated shape {name!r}; choose from {', '.join(sorted(GENERATORS))}") from None
-    try:
-        return fn(**params)
-    except TypeError as exc:
-        raise InputError(f"bad parameters for demo:{name}: {exc}") from None
+
+def _vertex_estimate(name: str, p: dict) -> int:
+    if name in ("sphere", "blob"):
+        return 10 * 4 ** p.get("subdivisions", 4) + 2
+    if name == "torus":
+        return p.get("n_major", 64) * p.get("n_minor", 24)
+    if name == "cylinder":
+        return p.get("sections", 48) * (p.get("n_height", 24) + 2 * p.get("n_cap_rings", 8))
+    if name == "plane":
+        return p.get("n", 41) ** 2
+    return int(6000 * (0.03 / p.get("resolution", 0.03)) ** 2)
+
+
+def generate(name: str, force: bool = False, **params) -> Geometry:
+    """Build a generated shape by name (``demo:NAME`` on the command line).
+
+    Parameter values may be numbers or strings (from ``demo:NAME:key=value``);
+    each is checked against ``PARAMETERS``.  Shapes with more than
+    ``MAX_GENERATED_VERTICES`` vertices are refused unless ``force``.
+    """
+    if name not in GENERATORS:
+        raise InputError(f"unknown generated shape {name!r}; choose from {', '.join(sorted(GENERATORS))}")
+    spec = PARAMETERS[name]
+    values = {}
+    for key, value in params.items():
+        if key not in spec:
+            raise InputError(f"demo:{name} has no parameter {key!r} (parameters: {', '.join(spec)})")
+        kind, bounds = spec[key]
+        label = f"demo:{name} parameter {key}"
+        values[key] = (check_int(value, label, **bounds) if kind == "int" else
+                       check_seed(value, label) if kind == "seed" else check_float(value, label, **bounds))
+    if name == "torus" and values.get("minor", 0.35) >= values.get("major", 1.0):
+        raise InputError(f"demo:torus needs minor < major (got minor {values.get('minor', 0.35):g}, "
+                         f"major {values.get('major', 1.0):g}): the tube would cross itself")
+    estimate = _vertex_estimate(name, values)
+    if estimate > MAX_GENERATED_VERTICES and not force:
+        raise TooLargeError(f"demo:{name} with these parameters has about {estimate:,} vertices, more than "
+                            f"{MAX_GENERATED_VERTICES:,}; lower them or use --force")
+    return GENERATORS[name](**values)

@@ -2,8 +2,10 @@
 
 ``inspect_mesh`` reports (for ``shapecond info``); ``clean_mesh`` raises
 ``InputError`` on what cannot be used and drops unreferenced vertices, keeping
-the map back to the file's ids (DESIGN.md section 4: TOSCA's gorilla has 1,328
-isolated vertices, which break Laplacians).
+the map back to the file's ids (TOSCA's gorilla has 1,328 isolated vertices,
+which break Laplacians).  Checks are scale-free: areas are measured on the
+shape scaled to a unit bounding-box diagonal (``unit_length``), so a mesh in
+metres and the same mesh in nanometres get the same verdict.
 """
 
 from __future__ import annotations
@@ -12,12 +14,25 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from ..checks import check_point_cloud
 from ..errors import InputError
 from .geometry import Geometry
 
 #: A face whose area is below this fraction of the squared bounding-box diagonal
 #: is degenerate (exactly repeated or collinear vertices, not a thin sliver).
 ZERO_AREA_RTOL = 1e-14
+#: Coordinates must lie within +-MAX_COORD and the shape's size above MIN_SIZE:
+#: distances are kept as float32 rows (normal range 1e-38 .. 3e38) and computed
+#: on the shape scaled to unit size, so every scale in between gives the same result.
+MAX_COORD = 1e35
+MIN_SIZE = 1e-35
+
+
+def unit_length(vertices: np.ndarray) -> float:
+    """Bounding-box diagonal of finite vertices, computed without overflow."""
+    span = np.ptp(vertices, axis=0)
+    top = float(np.max(span)) if span.size else 0.0
+    return top * float(np.linalg.norm(span / top)) if top > 0 else 0.0
 
 
 def face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -54,6 +69,10 @@ def mesh_problems(vertices: np.ndarray, faces: np.ndarray | None) -> list[str]:
         return ["no vertices" if vertices.size == 0 else f"vertices have shape {vertices.shape}, expected (n, 3)"]
     if not np.all(np.isfinite(vertices)):
         problems.append(f"{int(np.sum(~np.all(np.isfinite(vertices), axis=1)))} vertices have NaN or infinite coordinates")
+    elif np.max(np.abs(vertices)) > MAX_COORD:
+        problems.append(f"coordinates up to {np.max(np.abs(vertices)):.3g} are beyond +-{MAX_COORD:g}; rescale the shape")
+    elif faces is not None and 0 < unit_length(vertices) < MIN_SIZE:
+        problems.append(f"the shape is {unit_length(vertices):.3g} across, below {MIN_SIZE:g}; rescale it")
     if faces is None:
         return problems
     if faces.size == 0:
@@ -66,9 +85,10 @@ def mesh_problems(vertices: np.ndarray, faces: np.ndarray | None) -> list[str]:
                         f"but there are {vertices.shape[0]} vertices")
         return problems
     repeated = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])
-    if np.all(np.isfinite(vertices)):
-        diag2 = float(np.sum((vertices.max(0) - vertices.min(0)) ** 2))
-        zero = repeated | (face_areas(vertices, faces) <= ZERO_AREA_RTOL * max(diag2, 1e-300))
+    size = unit_length(vertices) if np.all(np.isfinite(vertices)) else 0.0
+    if size > 0:
+        unit = (vertices - vertices.min(axis=0)) / size
+        zero = repeated | (face_areas(unit, faces) <= ZERO_AREA_RTOL)
     else:
         zero = repeated
     if np.any(zero):
@@ -108,11 +128,16 @@ def inspect_mesh(vertices: np.ndarray, faces: np.ndarray | None) -> dict:
 
 def clean_mesh(vertices, faces, name: str, largest_component: bool = False, file_ids=None) -> Geometry:
     """Validate, drop unreferenced vertices (keeping file ids) and check connectivity."""
+    vertices = np.asarray(vertices)
+    if np.iscomplexobj(vertices) or not (np.issubdtype(vertices.dtype, np.number) or vertices.dtype == bool):
+        raise InputError(f"{name}: vertex coordinates must be real numbers")
     vertices = np.asarray(vertices, dtype=np.float64)
     if faces is not None:
         faces = np.asarray(faces)
+        if faces.size and not (np.issubdtype(faces.dtype, np.integer) or np.issubdtype(faces.dtype, np.floating)):
+            raise InputError(f"{name}: face indices are not integers")
         if faces.size and not np.issubdtype(faces.dtype, np.integer):
-            if not np.all(np.isfinite(faces)) or np.any(faces != np.round(faces)):
+            if not np.all(np.isfinite(faces)) or np.any(faces != np.round(faces)) or np.max(np.abs(faces)) > 2**62:
                 raise InputError(f"{name}: face indices are not integers")
         faces = faces.astype(np.int64)
     ids = np.arange(vertices.shape[0], dtype=np.int64) if file_ids is None else np.asarray(file_ids, np.int64)
@@ -120,8 +145,7 @@ def clean_mesh(vertices, faces, name: str, largest_component: bool = False, file
     if problems:
         raise InputError(f"{name}: {problems[0]}")
     if faces is None:
-        if vertices.shape[0] < 3:
-            raise InputError(f"{name}: a point cloud needs at least 3 points, got {vertices.shape[0]}")
+        check_point_cloud(vertices, name)
         return Geometry(vertices, None, ids, name)
     n_comp, labels = face_components(vertices.shape[0], faces)
     if n_comp > 1:
@@ -135,31 +159,3 @@ def clean_mesh(vertices, faces, name: str, largest_component: bool = False, file
     used[faces.ravel()] = True
     new_index = np.cumsum(used) - 1
     return Geometry(vertices[used], new_index[faces], ids[used], name)
-
-
-def check_distance_matrix(D: np.ndarray, name: str = "distance matrix") -> np.ndarray:
-    """A usable distance matrix: square, finite, symmetric, non-negative, zero diagonal."""
-    D = np.asarray(D)
-    if D.ndim != 2 or D.shape[0] != D.shape[1]:
-        raise InputError(f"{name}: expected a square N x N matrix, got shape {D.shape}")
-    if not np.issubdtype(D.dtype, np.number):
-        raise InputError(f"{name}: entries are not numbers")
-    D = D.astype(np.float64)
-    n = D.shape[0]
-    if n < 3:
-        raise InputError(f"{name}: needs at least 3 points, got {n}")
-    if not np.all(np.isfinite(D)):
-        raise InputError(f"{name}: contains NaN or infinite entries")
-    if np.any(D < 0):
-        raise InputError(f"{name}: contains negative distances")
-    scale = float(D.max())
-    if scale <= 0:
-        raise InputError(f"{name}: all distances are zero (zero diameter)")
-    if np.max(np.abs(D - D.T)) > 1e-8 * scale:
-        raise InputError(f"{name}: is not symmetric")
-    if np.max(np.abs(np.diag(D))) > 1e-8 * scale:
-        raise InputError(f"{name}: has a non-zero diagonal")
-    off = D + np.eye(n) * scale
-    if np.min(off) <= 0:
-        raise InputError(f"{name}: two distinct points are at distance zero")
-    return 0.5 * (D + D.T) - np.diag(np.diag(D))

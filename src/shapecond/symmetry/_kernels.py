@@ -1,4 +1,4 @@
-"""Compiled inner loops of the witness search (DESIGN.md section 3).
+"""Compiled inner loops of the witness search.
 
 The search keeps, for the current map ``t`` (samples ``0..n-1`` into targets
 ``0..M-1``), the products of ``shapecond.symmetry.objective``::

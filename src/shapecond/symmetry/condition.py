@@ -34,8 +34,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, TooLargeError
-from .exact import check_instance, enumerate_maps, exact_sigma, map_count
+from ..jsonable import jsonable
+from ..checks import check_float, check_int, check_seed
+from ..errors import TooLargeError
+from ..limits import check_cost
+from .exact import enumerate_maps, exact_sigma, map_count
+from .objective import check_instance
 
 #: Largest number of free samples for which probes enumerate all maps (9! maps).
 MAX_PROBE_POINTS = 9
@@ -70,6 +74,8 @@ class ProbeResult:
     witness : ndarray or None
         The map attaining σ.
     seconds : float
+    notes : tuple of str
+        E.g. that ``time_limit`` stopped the probes early.
     """
 
     ratios: tuple
@@ -77,6 +83,7 @@ class ProbeResult:
     sigma: float
     witness: np.ndarray | None
     seconds: float
+    notes: tuple = ()
 
     @property
     def kappa_probe_max(self) -> float:
@@ -88,14 +95,25 @@ class ProbeResult:
 
     def to_dict(self) -> dict:
         lo, hi = self.kappa
-        return {
+        return jsonable({
             "probes": list(self.ratios),
             "probe_kinds": list(self.kinds),
             "kappa_probe_max": self.kappa_probe_max,
             "sigma": self.sigma,
             "kappa": {"lower": lo, "upper": hi},
+            "witness": None if self.witness is None else [int(v) for v in self.witness],
+            "notes": list(self.notes),
             "seconds": self.seconds,
-        }
+        })
+
+
+#: Seconds per (enumerated map x N²) of one probe, measured at N = 8 and 9.
+PROBE_COST = 1.2e-8
+
+
+def probe_seconds(n: int, n_landmarks: int, trials: int) -> float:
+    """Estimated seconds of ``trials`` probes (each enumerates every map)."""
+    return trials * map_count(n, n, n_landmarks) * n * n * PROBE_COST
 
 
 def optimal_matching(D: np.ndarray, Dt: np.ndarray, landmarks=()) -> np.ndarray:
@@ -124,7 +142,8 @@ def probe_ratio(D: np.ndarray, Dt: np.ndarray, landmarks=()) -> float | None:
     return float(np.sqrt(np.sum(D[np.arange(D.shape[0]), t] ** 2))) / dist
 
 
-def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float = 0.05) -> ProbeResult:
+def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float = 0.05,
+                 time_limit: float | None = None, force: bool = False, progress=None) -> ProbeResult:
     """Probe κ with ``trials`` perturbed copies of ``D`` (module docstring).
 
     Parameters
@@ -141,11 +160,19 @@ def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float 
         Samples fixed by every map, including ``T_opt``.
     scale : float
         Noise level, relative to the RMS distance.
+    time_limit : float or None
+        Stop probing after this many seconds (the probes so far are returned,
+        with a note).
+    force : bool
+        Run even when the estimated time is beyond ``shapecond.limits``.
+    progress : callable(done, total) or None
+        Called after each probe.
 
     Raises
     ------
     TooLargeError
-        Above ``MAX_PROBE_POINTS`` free samples.
+        Above ``MAX_PROBE_POINTS`` free samples, or when the estimated time of
+        the probes exceeds the limit and ``force`` is False.
     """
     t0 = time.perf_counter()
     D, n, L = check_instance(D, None, landmarks)
@@ -155,8 +182,17 @@ def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float 
             f"kappa probes enumerate all {map_count(n, n, len(L))} maps per trial; "
             f"limited to {MAX_PROBE_POINTS} free samples, got {free} (use fewer points or more landmarks)"
         )
-    if trials < 1:
-        raise InputError(f"trials must be at least 1, got {trials}")
+    trials = check_int(trials, "trials", lo=1)
+    scale = check_float(scale, "scale", lo=0.0, lo_open=True, hi=10.0)
+    seed = check_seed(seed)
+    if time_limit is not None:
+        time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
+    estimate = probe_seconds(n, len(L), trials)
+    if time_limit is None or estimate <= time_limit:
+        check_cost(f"{trials} kappa probes at N = {n} ({map_count(n, n, len(L))} maps each)", estimate,
+                   force=force, hint="use fewer --trials, a --time-limit, or --force")
+    deadline = None if time_limit is None else t0 + time_limit
+    notes = []
     rng = np.random.default_rng(seed)
     ex = exact_sigma(D, landmarks=L)
     sigma, w = ex.sigma, ex.witness
@@ -194,7 +230,12 @@ def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float 
             continue
         ratios.append(r)
         kinds.append(kind)
-    return ProbeResult(tuple(ratios), tuple(kinds), sigma, w, time.perf_counter() - t0)
+        if progress is not None:
+            progress(len(ratios), trials)
+        if deadline is not None and time.perf_counter() > deadline and len(ratios) < trials:
+            notes.append(f"time limit of {time_limit:g} s reached after {len(ratios)} of {trials} probes")
+            break
+    return ProbeResult(tuple(ratios), tuple(kinds), sigma, w, time.perf_counter() - t0, tuple(notes))
 
 
 __all__ = ["kappa_bracket", "kappa_probes", "ProbeResult", "probe_ratio", "optimal_matching", "MAX_PROBE_POINTS"]

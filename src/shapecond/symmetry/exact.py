@@ -1,8 +1,8 @@
-"""Exact global symmetry score σ(X) (paper Eq. 5, L² case; DESIGN.md section 3).
+"""Exact global symmetry score σ(X) (paper Eq. 5, L² case).
 
 σ(X) = sup_{T ≠ Id} sqrt(d²(T) / Dist²(T)) over injective maps ``T`` of the
 ``N`` samples into the ``M`` points of ``D`` (``M == N``: the paper's
-bijections; ``M > N``: the dense-target score of issue 4) that fix every
+bijections; ``M > N``: the dense-target score) that fix every
 landmark (T(l) = l).  ``σ = inf`` when a non-identity map is an isometry up to
 round-off (``objective.is_isometry``); the witness is then that map.
 
@@ -30,9 +30,12 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..jsonable import jsonable
+from ..errors import TooLargeError
+from ..limits import human_bytes, one_blas_thread
 from . import objective
 from ._bnb import branch_and_bound, ratio_of, swap_search
+from .objective import check_instance
 
 #: Largest number of maps enumerated (9! = 362 880, about 0.5 s).
 ENUMERATION_LIMIT = 362_880
@@ -68,40 +71,8 @@ class ExactResult:
     nodes: int = 0
 
     def to_dict(self) -> dict:
-        """The fields as a dict (numpy arrays included; ``cli.common.jsonable`` converts them)."""
-        return asdict(self)
-
-
-def check_instance(D, n_samples=None, landmarks=()):
-    """Validate a score instance; return ``(D, N, landmarks)`` as arrays/ints.
-
-    Raises ``InputError`` (one line) for a non-square, non-finite, negative or
-    asymmetric ``D`` (relative tolerance 1e-9), a nonzero diagonal, ``N`` out
-    of ``[2, M]``, or landmarks out of ``range(N)`` or repeated.
-    """
-    D = np.asarray(D, dtype=np.float64)
-    if D.ndim != 2 or D.shape[0] != D.shape[1]:
-        raise InputError(f"distance matrix must be square, got shape {D.shape}")
-    if not np.all(np.isfinite(D)):
-        raise InputError("distance matrix contains NaN or infinite entries")
-    if np.any(D < 0):
-        raise InputError("distance matrix has negative entries")
-    M = D.shape[0]
-    scale = float(np.max(D)) if D.size else 0.0
-    if not np.allclose(D, D.T, rtol=0.0, atol=1e-9 * max(scale, 1e-300)):
-        raise InputError("distance matrix is not symmetric")
-    if np.any(np.diag(D) != 0):
-        raise InputError("distance matrix has a nonzero diagonal")
-    n = M if n_samples is None else int(n_samples)
-    if n < 2 or n > M:
-        raise InputError(f"number of samples must be in [2, {M}], got {n}")
-    L = [int(l) for l in landmarks]
-    if len(set(L)) != len(L):
-        raise InputError("landmarks are repeated")
-    bad = [l for l in L if l < 0 or l >= n]
-    if bad:
-        raise InputError(f"landmark {bad[0]} is not a sample index in [0, {n})")
-    return 0.5 * (D + D.T), n, L
+        """The fields as a dict as JSON-ready values (``shapecond.jsonable``)."""
+        return jsonable(asdict(self))
 
 
 def map_count(n: int, m: int, n_landmarks: int) -> int:
@@ -154,16 +125,30 @@ def _enumerate(D, n, L):
     return best_r, best_t, maps.shape[0]
 
 
-def _warm_start(D, n, L):
-    """Best of our swap ascent and the witness search (``search.witness_search``).
+#: Branch and bound needing more memory than this is refused unless forced: it only
+#: finishes for N up to about 20, where it needs a few MB.
+BNB_MAX_BYTES = 2**30
+
+
+def bnb_bytes(n: int, m: int, n_landmarks: int) -> float:
+    """Memory of the branch and bound's per-depth cross terms C1: 8 (free + 1) N M bytes."""
+    return 8.0 * (n - n_landmarks + 1) * n * m
+
+
+def _warm_start(D, n, L, warm=None):
+    """A good map to start the tree search from: ``warm``'s witness when given (the caller's
+    search already ran, so nothing is recomputed before the time limit starts to count), else
+    the best of our swap ascent and a quick ``search.witness_search``.
 
     Only speeds the tree search up: its result never depends on the warm start.
     """
+    if warm is not None:
+        w = np.asarray(warm.witness, dtype=np.int64)
+        if w.shape == (n,) and np.unique(w).size == n and all(w[l] == l for l in L):
+            return ratio_of(D, w), w
+    from .search import witness_search
+
     best = swap_search(D, n, L, np.random.default_rng(0))
-    try:
-        from .search import witness_search
-    except ImportError:  # pragma: no cover - the search module is optional here
-        return best
     res = witness_search(D, n_samples=n, landmarks=L, seed=0, effort="quick")
     w = np.asarray(res.witness, dtype=np.int64)
     valid = w.shape == (n,) and np.unique(w).size == n and all(w[l] == l for l in L)
@@ -174,18 +159,7 @@ def _warm_start(D, n, L):
     return best
 
 
-def _single_thread_blas():
-    """Small products only lose time to BLAS threads on a shared machine."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover
-        import contextlib
-
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
-
-
-def exact_sigma(D, n_samples=None, landmarks=(), time_limit=None) -> ExactResult:
+def exact_sigma(D, n_samples=None, landmarks=(), time_limit=None, warm=None, force: bool = False) -> ExactResult:
     """Exact σ(X) of Eq. 5 by enumeration or branch and bound.
 
     Parameters
@@ -200,13 +174,27 @@ def exact_sigma(D, n_samples=None, landmarks=(), time_limit=None) -> ExactResult
     time_limit : float, optional
         Seconds for branch and bound (enumeration is not interrupted; it is
         only chosen below ``ENUMERATION_LIMIT`` maps).
+    warm : object with ``witness`` (a map), optional
+        A known good map (e.g. from ``search.witness_search``) to start the tree
+        search from; without it a quick witness search is run first.
+    force : bool
+        Run branch and bound even when its memory (``bnb_bytes``) exceeds
+        ``BNB_MAX_BYTES``, or without a time limit beyond 16 free samples.
 
     Returns
     -------
     ExactResult
+
+    Raises
+    ------
+    TooLargeError
+        When branch and bound is needed and its memory is beyond the limit, or
+        when it has no time limit beyond 16 free samples (it could run for hours),
+        unless ``force``.
     """
     t0 = time.perf_counter()
     D, n, L = check_instance(D, n_samples, landmarks)
+    L = [int(v) for v in L]
     M = D.shape[0]
     count = map_count(n, M, len(L))
     if count <= 1:
@@ -216,9 +204,17 @@ def exact_sigma(D, n_samples=None, landmarks=(), time_limit=None) -> ExactResult
         method = "enumeration"
         finished = True
     else:
+        need = bnb_bytes(n, M, len(L))
+        if not force and need > BNB_MAX_BYTES:
+            raise TooLargeError(f"branch and bound at N = {n}, M = {M} needs {human_bytes(need)} "
+                                f"(limit {human_bytes(BNB_MAX_BYTES)}) and cannot finish at this size; "
+                                "use --force")
+        if not force and time_limit is None and n - len(L) > 16:
+            raise TooLargeError(f"branch and bound for {n - len(L)} free samples has no time bound; give a time limit "
+                                "or use --force")
         deadline = None if time_limit is None else t0 + float(time_limit)
-        with _single_thread_blas():
-            r0, w0 = _warm_start(D, n, L)
+        with one_blas_thread():
+            r0, w0 = _warm_start(D, n, L, warm)
             r, t, finished, nodes = branch_and_bound(D, n, L, r0, w0, deadline)
         method = "branch-and-bound"
     lower = math.sqrt(r) if t is not None else 0.0

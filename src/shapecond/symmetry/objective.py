@@ -14,7 +14,7 @@ score); the formulas below are the same.
 Both sums run over ordered pairs (each unordered pair counts twice), as in
 ``‖D − P D Pᵀ‖²_F`` for a permutation matrix ``P``.
 
-Incremental form used by the search (DESIGN.md section 3).  Write
+Incremental form used by the search.  Write
 ``Dist² = C_X + C_T − 2 S`` with ``C_X = Σ D[x,x']²`` (fixed),
 ``C_T = Σ D[Tx,Tx']²`` and ``S = Σ D[x,x'] D[Tx,Tx']``, and keep
 
@@ -31,6 +31,9 @@ import math
 
 import numpy as np
 
+from ..checks import check_distance_matrix
+from ..errors import InputError
+
 #: A map whose distortion is below this fraction of the shape's own size is an
 #: isometry: ``sqrt(Dist²(T)) <= ISOMETRY_RTOL * ‖D_XX‖_F`` gives σ = ∞.
 #: Round-off alone stays below 1e-13, but meshes are stored with 6-7 significant
@@ -40,6 +43,37 @@ import numpy as np
 #: below one part in a million is below what such data can show, so it counts as
 #: an isometry; anything larger is reported as a finite score.
 ISOMETRY_RTOL = 1e-6
+
+
+def check_instance(D, n_samples=None, landmarks=()):
+    """Validate a score instance; return ``(D, N, sorted landmarks)``.
+
+    ``D`` goes through ``checks.check_distance_matrix`` (square, real, finite,
+    non-negative, symmetric, zero diagonal; a matrix that passed before is
+    accepted in O(1)); ``N`` must lie in ``[2, M]`` and the landmarks be distinct
+    sample indices.  Every score function calls this first, so an invalid
+    matrix never yields a number.
+    """
+    D = check_distance_matrix(D)
+    M = D.shape[0]
+    if n_samples is None:
+        n = M
+    else:
+        if isinstance(n_samples, (bool, np.bool_)) or not isinstance(n_samples, (int, np.integer)):
+            raise InputError(f"the number of samples must be an integer, got {n_samples!r}")
+        n = int(n_samples)
+    if n < 2 or n > M:
+        raise InputError(f"the number of samples must be in [2, {M}], got {n}")
+    try:
+        L = np.asarray(list(landmarks), dtype=np.int64).ravel()
+    except (TypeError, ValueError, OverflowError):
+        raise InputError("landmarks must be sample indices (integers)") from None
+    if L.size and (L.min() < 0 or L.max() >= n):
+        bad = int(L[(L < 0) | (L >= n)][0])
+        raise InputError(f"landmark {bad} is not a sample index in [0, {n})")
+    if np.unique(L).size != L.size:
+        raise InputError("landmarks are repeated")
+    return D, n, np.sort(L)
 
 
 def _as_map(D: np.ndarray, t) -> np.ndarray:

@@ -9,7 +9,7 @@ so that for the indicator ``v`` of a map T, ``vᵀ A v = Dist²(T)`` and
 ``vᵀ B v = d²(T)``, and proposes ``σ <= 1/sqrt(λ_0)`` with ``λ_0`` the smallest
 generalised eigenvalue of ``A v = λ B v``.
 
-Why this is NOT a bound (DESIGN.md 2.1): ``A`` has a zero diagonal (``x = x'``
+Why this is NOT a bound: ``A`` has a zero diagonal (``x = x'``
 and ``y = y'`` give ``(0 − 0)²``) and non-negative off-diagonal entries, so its
 trace is 0 and, unless ``A = 0``, it has a negative eigenvalue.  ``B`` is
 singular on the identity assignments ``x -> x``; on the remaining assignments
@@ -34,8 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import eigh
 
+from ..jsonable import jsonable
 from ..errors import TooLargeError
-from .exact import check_instance
+from .objective import check_instance
 
 #: Largest N for the dense (N·M)-square eigenproblem of this diagnostic.
 MAX_PAPER_POINTS = 20
@@ -72,7 +73,7 @@ class PaperDiagnostic:
     is_bound: bool = False
 
     def to_dict(self) -> dict:
-        return {
+        return jsonable({
             "diagnostic": "paper Section 4.2 eigenvalue quantity; NOT an upper bound",
             "lambda_0": self.lambda_0,
             "paper_value": self.paper_value,
@@ -81,7 +82,7 @@ class PaperDiagnostic:
             "n_assignments": self.n_assignments,
             "seconds": self.seconds,
             "is_bound": self.is_bound,
-        }
+        })
 
 
 def paper_matrices(D: np.ndarray, n: int):

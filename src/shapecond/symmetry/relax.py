@@ -1,4 +1,4 @@
-"""LP upper bound on the global symmetry score (paper Section 4.2; DESIGN.md 2.2).
+"""LP upper bound on the global symmetry score (paper Section 4.2).
 
 σ(X)² = max_{T ≠ Id} d²(T) / Dist²(T) is a quadratic fractional assignment
 problem.  We relax it to the Adams–Johnson / RLT-1 linear program (the local
@@ -10,12 +10,12 @@ marginal polytope) the paper solves, over
 with constraints
 
 - rows ``Σ_a x[i,a] = 1``; columns ``Σ_i x[i,a] = 1`` (``<= 1`` when there are
-  more targets than samples, issue 4's injective maps);
+  more targets than samples, injective maps);
 - pair marginals over rows: ``Σ_a y[(i,a),(j,b)] = x[j,b]`` for every ordered
   ``i != j`` and every ``b``;
 - pair marginals over columns: ``Σ_{i != j} y[(i,a),(j,b)] = x[j,b]`` (``<=``
   for injective maps) for every ``(j, b)`` and ``a != b``.  Without them the
-  bound is 1.1–1.7× loose (DESIGN.md 2.2);
+  bound is 1.1–1.7× loose;
 - the identity cut ``Σ_i x[i,i] <= f − 2`` (``f`` free samples; ``f − 1`` for
   injective maps, where moving one sample to a non-sample target is allowed),
   which removes the identity from the relaxation as Eq. 5 removes it from the
@@ -41,8 +41,8 @@ Triangle cuts (beyond the paper).  The local marginal polytope admits
 sub-maps, whose pair variables couple the blocks pairwise in a way no joint
 distribution over maps can (the odd-cycle defect of pairwise relaxations).  On
 200 random and near-symmetric N = 8 instances this made the plain RLT-1 bound
-up to 1.14× loose (4 instances above 1.01), against the 1.0065 measured in
-DESIGN.md on other instances.  We therefore add, in rounds until none is
+up to 1.14× loose (4 instances above 1.01), against 1.0065 measured on other
+instances by the first prototype.  We therefore add, in rounds until none is
 violated, the triangle inequalities of the boolean quadric polytope for
 assignments ``u, v, w`` of three distinct samples to three distinct targets::
 
@@ -54,7 +54,7 @@ They remove the defect (worst ratio 1.000001 on the same 200 instances);
 ``cuts=False`` gives the paper's LP.
 
 Size: ``f·r + C(f,2)·r(r−1)`` variables (29 057 for 16 points); HiGHS took
-<= 0.1 s at N = 8, 0.2–4 s at N = 12 and 5–90 s at N = 16 in DESIGN.md.
+<= 0.1 s at N = 8, 0.2–4 s at N = 12 and 5–90 s at N = 16 in the prototype.
 Measured here (benchmarks/bench_exact_lp.py, 2 shared cores, three runs): 0.03–0.05 s
 at N = 8, 0.2–3.8 s at N = 12, 0.6–16.5 s at N = 14, 1.3–251 s at N = 16 (uniform
 random point sets are the slow case; near-symmetric ones take ~2 s), peak memory
@@ -72,9 +72,10 @@ import numpy as np
 import scipy.sparse as sp
 import highspy
 
+from ..jsonable import jsonable
 from ..errors import TooLargeError
 from . import objective
-from .exact import check_instance
+from .objective import check_instance
 
 #: Largest number of free points (bijection case) the LP is built for unless forced.
 MAX_LP_POINTS = 16
@@ -94,8 +95,8 @@ class LPResult:
     n_cuts: int = 0
 
     def to_dict(self) -> dict:
-        """The fields as a dict (numpy arrays included; ``cli.common.jsonable`` converts them)."""
-        return asdict(self)
+        """The fields as a dict as JSON-ready values (``shapecond.jsonable``)."""
+        return jsonable(asdict(self))
 
 
 def lp_size(n_free: int, n_targets: int) -> int:

@@ -1,60 +1,108 @@
-"""The global score of one metric shape as the JSON-ready report of ``shapecond score``.
+"""The full answer to "how hard is this shape to match": the result of ``shapecond score``.
 
-``score_report`` runs ``symmetry_score`` (the σ bracket of Eq. 5 with its
-witness, σ̂ = σ√N and the κ bracket of Theorem 4.1), for dense targets on a
-mesh or point cloud the resolution report (is the witness a symmetry within
-sampling resolution?), and the scale-aware score δ(ε) with its own witness
-(``symmetry.scale``), and returns them as one dict with the keys that
-``shapecond score --json`` prints.  The command line and batch scoring both
-call it, so that their numbers cannot drift apart.
+``score_shape(shape, landmark_ids)`` runs the symmetry score of a
+``MetricShape`` (the σ bracket of paper Eq. 5, σ̂ = σ√N and the κ bracket of
+Theorem 4.1, ``score.symmetry_score``), the resolution report for dense targets
+(``resolution``), the scale-aware score δ(ε) with its own witness (``scale``)
+and the verdict in words (``verdict``), and returns a ``ScoreResult`` whose
+``to_dict()`` is the JSON object of ``shapecond score --json``; the command
+line and batch scoring both use it, so their numbers cannot drift apart.
+Landmarks and the witnesses are given in the input's own ids.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, field
+
 import numpy as np
 
-from shapecond.symmetry.resolution import resolution_for_shape
-from shapecond.symmetry.scale import scale_score
-from shapecond.symmetry.score import symmetry_score
+from shapecond.jsonable import jsonable
+from shapecond.symmetry.resolution import ResolutionReport, resolution_for_shape
+from shapecond.symmetry.scale import ScaleScore, scale_score
+from shapecond.symmetry.score import SymmetryScore, symmetry_score
+from shapecond.symmetry.verdict import verdict
 
 
-def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                 effort="default", epsilon=None) -> tuple[dict, object]:
-    """JSON-ready report of one ``MetricShape`` and the ``SymmetryScore`` behind it.
+def _fmt(v: float) -> str:
+    return "inf" if math.isinf(v) else f"{v:.4g}"
 
-    Parameters
+
+@dataclass(frozen=True, eq=False)
+class ScoreResult:
+    """σ bracket, κ bracket, witness (input ids), resolution report and verdict of one shape.
+
+    Attributes
     ----------
-    shape : MetricShape
-    landmark_ids : the input's ids (file vertex ids, matrix rows) fixed by every map;
-        each must be a sample.
-    exact, upper, time_limit, seed, effort : passed to ``symmetry_score``.
-    epsilon : distortion level of δ(ε) (default ``symmetry.scale.default_epsilon``).
+    score : SymmetryScore (sample indices; ``score.witness[i]`` is a point of Y).
+    shape : MetricShape the score was computed on.
+    resolution : ResolutionReport or None (only for dense targets on a mesh).
+    verdict : one line saying what the numbers mean for matching.
+    landmarks : the fixed landmarks, in the input's ids.
+    scale : ScaleScore, δ(ε) with its witness (``symmetry.scale``), or None.
+    """
 
-    Returns
-    -------
-    (dict, SymmetryScore)
-        The dict holds ``SymmetryScore.to_dict()`` plus ``landmarks``, ``samples``
-        (input ids of the samples), ``target``, ``resolution`` (a
-        ``ResolutionReport`` dict, or None for bijections and matrices) and
-        ``witness_vertices`` (input ids of the witness's images, None for a matrix)
-        and ``scale`` (``ScaleScore.to_dict()`` plus its ``witness_vertices``).
+    score: SymmetryScore
+    shape: object = field(repr=False)
+    resolution: ResolutionReport | None
+    verdict: str
+    landmarks: tuple = ()
+    scale: ScaleScore | None = None
+
+    @property
+    def sigma(self) -> tuple:
+        """(lower, upper) bracket of σ; ``math.inf`` for an exact symmetry."""
+        return self.score.sigma_lower, self.score.sigma_upper
+
+    @property
+    def kappa(self) -> tuple:
+        """(lower, upper) bracket of the condition number (Theorem 4.1)."""
+        return self.score.kappa_lower, self.score.kappa_upper
+
+    @property
+    def witness_ids(self) -> np.ndarray | None:
+        """Input id of the image of each sample under the witness (None for a matrix input: rows)."""
+        return self.shape.target_ids[self.score.witness]
+
+    def to_dict(self) -> dict:
+        """The JSON object of ``shapecond score --json`` (``inf`` as "inf")."""
+        out = self.score.to_dict()
+        out["landmarks"] = [int(v) for v in self.landmarks]
+        out["samples"] = [int(v) for v in self.shape.sample_ids]
+        out["target"] = self.shape.target
+        out["resolution"] = None if self.resolution is None else self.resolution.to_dict()
+        out["verdict"] = self.verdict
+        out["witness_vertices"] = None if self.shape.geometry is None else [int(v) for v in self.witness_ids]
+        if self.scale is not None:
+            out["scale"] = self.scale.to_dict()
+            out["scale"]["witness_vertices"] = (None if self.shape.geometry is None else
+                                                [int(v) for v in self.shape.target_ids[self.scale.witness]])
+        return jsonable(out)
+
+    def __repr__(self) -> str:
+        lo, hi = self.sigma
+        return (f"ScoreResult(sigma=[{_fmt(lo)}, {_fmt(hi)}], kappa=[{_fmt(self.kappa[0])}, {_fmt(self.kappa[1])}], "
+                f"N={self.score.n_points}, M={self.score.n_targets}, verdict={self.verdict!r})")
+
+    def plot(self, fig=None, **kw):
+        """The witness map drawn on the shape, onto ``fig`` (or a new Figure); returns the Figure."""
+        from shapecond.viz.witness import render_witness_png
+
+        return render_witness_png(self.shape, self.score.witness, None, landmarks=tuple(self.score.landmarks),
+                                  fig=fig, **kw)
+
+
+def score_shape(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
+                effort="default", force=False, epsilon=None) -> ScoreResult:
+    """Score a ``MetricShape`` whose samples include the landmarks ``landmark_ids`` (input ids).
+
+    ``epsilon``: distortion level of δ(ε) (default ``symmetry.scale.default_epsilon``).
     """
     lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
     sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
-                        seed=seed, effort=effort)
-    out = sc.to_dict()
-    out["landmarks"] = [int(v) for v in landmark_ids]
-    out["samples"] = [int(v) for v in shape.sample_ids]
-    out["target"] = shape.target
+                        seed=seed, effort=effort, force=force)
     res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
-    out["resolution"] = None if res is None else res.to_dict()
-    if shape.geometry is None:
-        out["witness_vertices"] = None
-    else:
-        out["witness_vertices"] = [int(v) for v in shape.target_ids[sc.witness]]
-    scale = scale_score(shape.D, shape.n_points, lm, epsilon, seed=seed, effort=effort,
+    delta = scale_score(shape.D, shape.n_points, lm, epsilon, seed=seed, effort=effort,
                         starts=[sc.witness, *sc.maps])
-    out["scale"] = scale.to_dict()
-    out["scale"]["witness_vertices"] = (None if shape.geometry is None
-                                        else [int(v) for v in shape.target_ids[scale.witness]])
-    return out, sc
+    return ScoreResult(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta),
+                       tuple(int(v) for v in landmark_ids), delta)

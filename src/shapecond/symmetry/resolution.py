@@ -1,4 +1,4 @@
-"""Is the witness an isometry within sampling resolution? (issue 4, item 2)
+"""Is the witness an isometry within sampling resolution?
 
 With dense targets (a set Y of M points containing the N samples X as its
 FPS prefix) the score of an exact symmetry keeps growing as M grows: the
@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from shapecond.jsonable import jsonable
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry.search import witness_search
 
@@ -60,10 +61,10 @@ class ResolutionReport:
     displacement_rms: float
 
     def to_dict(self) -> dict:
-        return {"flag": self.flag, "covering_radius": self.covering_radius, "sigma_lo": self.sigma_lo,
+        return jsonable({"flag": self.flag, "covering_radius": self.covering_radius, "sigma_lo": self.sigma_lo,
                 "sigma_hi": self.sigma_hi, "n_targets_lo": self.n_targets_lo,
                 "n_targets_hi": self.n_targets_hi, "relative_change": self.relative_change,
-                "distortion_rms": self.distortion_rms, "displacement_rms": self.displacement_rms}
+                "distortion_rms": self.distortion_rms, "displacement_rms": self.displacement_rms})
 
 
 def classify(sigma_lo: float, sigma_hi: float, distortion_rms: float, covering_radius: float | None,

@@ -1,7 +1,6 @@
 """The global symmetry score as a bracket, with its witness and the κ bracket.
 
-Assembles the three estimators of σ(X) (paper Eq. 5, L² case; DESIGN.md
-sections 1-3):
+Assembles the three estimators of σ(X) (paper Eq. 5, L² case):
 
 * **lower**: ``search.witness_search``, always run; a certified lower bound
   attained by the returned witness map, never below the best single swap;
@@ -10,9 +9,9 @@ sections 1-3):
   the exact maximiser;
 * **upper**: the exact value if known, else the LP relaxation
   (``relax.lp_upper_bound``) when asked for and within its size limit, else
-  ``inf`` (no cheap valid upper bound exists: DESIGN.md 2.1).
+  ``inf`` (no cheap valid upper bound exists: see ``paper_bound``).
 
-Also reported: the size-free score σ̂ = σ·√N (DESIGN.md 1) and the bracket of
+Also reported: the size-free score σ̂ = σ·√N and the bracket of
 the condition number σ_lower ≤ κ ≤ 2·σ_upper + 1 (Theorem 4.1).
 ``time_limit`` bounds each of the exact and LP solves; the search always runs
 its full ``effort`` so that the lower bound is deterministic given ``seed``.
@@ -26,7 +25,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shapecond.jsonable import jsonable
 from shapecond.errors import TooLargeError
+from shapecond.limits import check_cost, search_seconds
 from shapecond.symmetry.search import _prepare, best_single_swap, witness_search
 
 #: ``exact="auto"`` computes σ exactly when enumeration is quick (<= this many maps).
@@ -81,7 +82,7 @@ class SymmetryScore:
         return 2.0 * self.sigma_upper + 1.0
 
     def to_dict(self) -> dict:
-        return {
+        return jsonable({
             "n_points": self.n_points,
             "n_targets": self.n_targets,
             "landmarks": [int(v) for v in self.landmarks],
@@ -93,7 +94,7 @@ class SymmetryScore:
             "upper_method": self.upper_method,
             "notes": list(self.notes),
             "seconds": self.seconds,
-        }
+        })
 
 
 def _exact_wanted(exact, n, m, n_landmarks) -> bool:
@@ -107,7 +108,7 @@ def _exact_wanted(exact, n, m, n_landmarks) -> bool:
 
 
 def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                   effort="default") -> SymmetryScore:
+                   effort="default", force=False, search=None) -> SymmetryScore:
     """Bracket of the global symmetry score σ(X) (Eq. 5) and of κ (Theorem 4.1).
 
     Parameters
@@ -121,12 +122,20 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
         above the LP's size limit (then ``sigma_upper = inf`` and a note).
     time_limit : seconds for each of the exact and LP solves (None: no limit).
     seed, effort : passed to ``witness_search``.
+    force : run the exact and LP solves even beyond their memory and size limits
+        (otherwise they are skipped with a note and the bracket keeps its bounds).
+    search : a ``witness_search`` result for the same D, N, landmarks and seed, to
+        reuse instead of searching again (``api.SymmetryProblem`` keeps them).
     """
     t0 = time.perf_counter()
     D, n, lm, _ = _prepare(D, n_samples, landmarks)
     m = D.shape[0]
     notes = []
-    res = witness_search(D, n, lm, seed=seed, effort=effort)
+    if search is None:
+        check_cost(f"the witness search at N = {n}, M = {m}", search_seconds(n, m), force=force)
+        res = witness_search(D, n, lm, seed=seed, effort=effort)
+    else:
+        res = search
     floor = best_single_swap(D, n, lm)[0]
     lower, witness = res.sigma, res.witness
     sigma_exact, hi, method = None, math.inf, "none"
@@ -135,8 +144,14 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
     elif _exact_wanted(exact, n, m, lm.size):
         from shapecond.symmetry.exact import exact_sigma
 
-        ex = exact_sigma(D, n, lm, time_limit=time_limit)
-        if ex.finished and ex.sigma is not None:
+        try:
+            ex = exact_sigma(D, n, lm, time_limit=time_limit, warm=res, force=force)
+        except TooLargeError as err:
+            ex = None
+            notes.append(f"exact σ not attempted: {err}")
+        if ex is None:
+            pass
+        elif ex.finished and ex.sigma is not None:
             if ex.sigma >= lower * (1 - 1e-9):
                 sigma_exact = ex.sigma
                 lower = hi = ex.sigma
@@ -151,7 +166,7 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
         from shapecond.symmetry.relax import lp_upper_bound
 
         try:
-            lp = lp_upper_bound(D, n, lm, time_limit=time_limit)
+            lp = lp_upper_bound(D, n, lm, time_limit=time_limit, force=force)
             hi, method = max(lp.upper, lower), "lp"
             if lp.upper == math.inf and lp.status.startswith("time"):
                 notes.append(f"LP upper bound did not finish within {time_limit} s")

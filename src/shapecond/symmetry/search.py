@@ -1,4 +1,4 @@
-"""Lower bound of the global symmetry score with a witness map (DESIGN.md section 3).
+"""Lower bound of the global symmetry score with a witness map.
 
 σ(X) = sup_{T ≠ Id} sqrt(d²(T) / Dist²(T)) (paper Eq. 5, L² case), the sup over
 maps fixing every landmark.  Any map T ≠ Id gives σ(X) ≥ σ_T, so the best map
@@ -32,16 +32,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from shapecond.jsonable import jsonable
 from shapecond.errors import InputError
 from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry import starts as S
 
-try:  # multithreaded BLAS on the small products here only costs time (and
-    # thrashes when the cores are shared); the hot loop is single-threaded numba
-    from threadpoolctl import threadpool_limits
-except ImportError:  # pragma: no cover - optional
-    threadpool_limits = None
+from shapecond.limits import one_blas_thread
 
 #: Work per effort level: MDS coordinates / reflection starts kept, spectral vectors / sign pairs / starts polished,
 #: Gilmore-Lawler grid size / starts polished, ladder runs, random starts,
@@ -80,27 +77,15 @@ class SearchResult:
     seconds: float
 
     def to_dict(self) -> dict:
-        return {"sigma": self.sigma, "witness": self.witness.tolist(), "d2": self.d2,
-                "dist2": self.dist2, "sigmas": list(self.sigmas), "seconds": self.seconds}
+        return jsonable({"sigma": self.sigma, "witness": self.witness.tolist(), "d2": self.d2,
+                "dist2": self.dist2, "sigmas": list(self.sigmas), "seconds": self.seconds})
 
 
 def _prepare(D, n_samples, landmarks):
-    """Validate the inputs; return (D float64 C-order, n, sorted landmarks, free samples)."""
-    D = np.ascontiguousarray(np.asarray(D, dtype=np.float64))
-    if D.ndim != 2 or D.shape[0] != D.shape[1]:
-        raise InputError(f"the distance matrix must be square, got shape {D.shape}")
-    if not np.all(np.isfinite(D)):
-        raise InputError("the distance matrix contains NaN or infinite entries")
+    """Validate the inputs (``objective.check_instance``); return (D, n, sorted landmarks, free samples)."""
+    D, n, lm = obj.check_instance(D, n_samples, landmarks)
     m = D.shape[0]
-    n = m if n_samples is None else int(n_samples)
-    if n < 2 or n > m:
-        raise InputError(f"the number of samples must be in [2, {m}], got {n}")
-    lm = np.asarray(list(landmarks), dtype=np.int64).ravel()
-    if lm.size and (lm.min() < 0 or lm.max() >= n):
-        raise InputError(f"landmark index out of range [0, {n})")
-    if np.unique(lm).size != lm.size:
-        raise InputError("landmarks must not repeat")
-    lm = np.sort(lm)
+    D = np.ascontiguousarray(D)
     free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
     if free.size < 2 and not (free.size == 1 and m > n):
         raise InputError("at least two samples must be free of landmarks: "
@@ -113,8 +98,7 @@ def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
 
     For the swap (a b), d² = 2 D[a,b]² and Dist² = 4 Σ_{x ≠ a,b} (D[x,a] − D[x,b])²,
     all pairs at once from K = D_XX² (one O(N³) product, then O(N²)).  Every
-    metric space has σ ≥ 1/sqrt(2(N − 2)) from these maps (DESIGN.md 1,
-    "Floor"); a swap that is an isometry gives ``inf``.
+    metric space has σ ≥ 1/sqrt(2(N − 2)) from these maps; a swap that is an isometry gives ``inf``.
     """
     D, n, lm, free = _prepare(D, n_samples, landmarks)
     if free.size < 2:
@@ -274,9 +258,7 @@ def witness_search(D, n_samples=None, landmarks=(), seed=0, starts=(), effort="d
     effort : "quick", "default" or "thorough" (see ``EFFORTS``).
     time_limit : seconds; the search stops between local searches when reached.
     """
-    if threadpool_limits is None:
-        return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, budget)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():  # the small products here only lose time to BLAS threads
         return _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, budget)
 
 

@@ -1,4 +1,4 @@
-"""Start maps of the witness search (DESIGN.md section 3, "Starts that matter").
+"""Start maps of the witness search.
 
 All starts are bijections of the samples X (the first ``n`` points), built
 from ``DX = D[:n, :n]``; landmarks are fixed points.  The search refines them
@@ -88,15 +88,19 @@ def _assign(score: np.ndarray, free: np.ndarray, n: int) -> np.ndarray:
     return t
 
 
-def _mds(DX: np.ndarray, k: int) -> np.ndarray:
-    """Classical MDS coordinates (n, k) of DX, scaled by sqrt(eigenvalue)."""
-    n = DX.shape[0]
+def classical_mds(D: np.ndarray, k: int = 3) -> np.ndarray:
+    """Classical (Torgerson) MDS coordinates (n, k) of a distance matrix, scaled by sqrt(eigenvalue).
+
+    Also places a distance-matrix input in space for pictures (``viz``).
+    """
+    D = np.asarray(D, dtype=float)
+    n = D.shape[0]
     J = np.eye(n) - 1.0 / n
-    B = -0.5 * J @ (DX**2) @ J
+    B = -0.5 * J @ (D**2) @ J
     lam, V = np.linalg.eigh(B)
     order = np.argsort(lam)[::-1][:k]
-    lam = np.clip(lam[order], 0.0, None)
-    return V[:, order] * np.sqrt(lam)
+    X = V[:, order] * np.sqrt(np.clip(lam[order], 0.0, None))
+    return np.hstack([X, np.zeros((n, k - X.shape[1]))]) if X.shape[1] < k else X
 
 
 def _diffusion(DX: np.ndarray, k: int) -> np.ndarray:
@@ -128,7 +132,7 @@ def spectral_starts(DX: np.ndarray, free: np.ndarray, n_vectors: int = 10,
     patterns = [(i,) for i in range(k)]
     patterns += list(itertools.combinations(range(min(n_pairs, k)), 2))
     out, seen = [], set()
-    for phi in (_mds(DX, k), _diffusion(DX, k)):
+    for phi in (classical_mds(DX, k), _diffusion(DX, k)):
         for pat in patterns:
             sgn = np.ones(phi.shape[1])
             sgn[[p for p in pat if p < phi.shape[1]]] = -1.0
@@ -181,7 +185,7 @@ def _landmark_mds(D: np.ndarray, n: int, k: int) -> tuple[np.ndarray, np.ndarray
     every point of Y from its distances to X (psi[:n] == phi), k' ≤ k the
     coordinates with a clearly positive eigenvalue.
     """
-    phi = _mds(D[:n, :n], k)
+    phi = classical_mds(D[:n, :n], k)
     lam = np.sum(phi**2, axis=0)
     keep = lam > 1e-9 * max(float(lam.max(initial=0.0)), 1e-300)
     phi, lam = phi[:, keep], lam[keep]
@@ -220,7 +224,7 @@ def reflection_starts(D: np.ndarray, n: int, free: np.ndarray, landmarks: np.nda
 
     An intrinsic symmetry T commutes with D, so on the MDS coordinates Φ of X
     it acts (for simple eigenvalues) as a diagonal ±1 matrix S; a mirror
-    typically flips several coordinates, not one or two (DESIGN.md section 3:
+    typically flips several coordinates, not one or two (measured:
     on an animal the antisymmetric vector was only 6th by |λ|).  Every pattern
     S ≠ I over the first ``n_coords`` coordinates is scored by the ratio
 

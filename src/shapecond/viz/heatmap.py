@@ -1,6 +1,6 @@
 """Heat maps on the mesh: per-sample values spread to every vertex (paper Figures 1, 4).
 
-The CNBS heat map (DESIGN.md 3) gives one number per sample: the symmetry score with
+The CNBS heat map gives one number per sample: the symmetry score with
 that sample fixed as a landmark.  To draw it on the surface every vertex needs a
 value.  Two interpolations are offered:
 
@@ -21,7 +21,7 @@ from scipy.spatial import cKDTree
 from ..errors import InputError
 from .ply import write_ply
 from .render import DEFAULT_VIEWS, guess_up, render_png
-from .witness import classical_mds
+from ..symmetry.starts import classical_mds
 
 
 def _points(shape):
@@ -70,7 +70,7 @@ def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -
 def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = None, views=DEFAULT_VIEWS,
                        method: str = "smooth", cmap: str = "turbo", title: str | None = None,
                        colorbar_label: str = "σ with the point fixed", ply: str | None = None,
-                       log: bool | None = None) -> str:
+                       log: bool | None = None, fig=None):
     """Draw a per-sample heat map on the shape (Figure 1/4 style), optionally also as PLY.
 
     Parameters
@@ -90,6 +90,8 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = No
         Colour by log10 of the values; None: when max/min > 20 (e.g. points near a
         mirror plane keep huge scores and would flatten the rest of the scale).
         Infinite values are drawn with the largest finite one.
+    fig : matplotlib Figure or None
+        Draw onto it; with ``path=None`` the Figure is returned (no PNG written).
     """
     V, F, pts = _points(shape)
     vv = interpolate_to_vertices(shape, values, method=method)
@@ -103,7 +105,7 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = No
     lm_vertices = [int(pts[int(i)]) for i in landmarks]
     up = up or guess_up(getattr(shape, "geometry", None))
     out = render_png(path, V, F, shown, lm_vertices, views=views, up=up, cmap=cmap, title=title,
-                     colorbar_label=label, point_size=6.0 if F is not None or len(V) > 2000 else 30.0)
+                     colorbar_label=label, point_size=6.0 if F is not None or len(V) > 2000 else 30.0, fig=fig)
     if ply is not None:
         write_ply(ply, V, F, shown, lm_vertices, cmap=cmap)
     return out

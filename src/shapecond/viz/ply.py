@@ -1,15 +1,14 @@
-"""PLY files with per-vertex colours for MeshLab or Blender (issue 6 item 4).
+"""PLY files with per-vertex colours for MeshLab or Blender.
 
-The file is written atomically (temporary file, then rename) with trimesh's exporter,
-``process=False`` so that the vertex order, and with it every vertex id, is kept.
+The file is written by ``shapes.io.write_mesh`` (trimesh's exporter with
+``process=False``, so that the vertex order, and with it every vertex id, is kept,
+through the atomic writer).
 Scalars are turned into colours with a matplotlib colour map; landmarks can be painted
 on top (first three red, the rest green, as the paper's Figure 6) together with their
 one-ring so that they are visible in a viewer.
 """
 
 from __future__ import annotations
-
-import os
 
 import matplotlib
 import numpy as np
@@ -84,20 +83,7 @@ def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, cmap="vi
         colours[vid] = c
         if nbrs is not None:
             colours[list(nbrs[vid])] = c
-    if F is None:
-        obj = trimesh.PointCloud(V, colors=colours)
-    else:
-        obj = trimesh.Trimesh(V, F, vertex_colors=colours, process=False)
-    data = obj.export(file_type="ply")
-    path = os.fspath(path)
-    d = os.path.dirname(os.path.abspath(path))
-    os.makedirs(d, exist_ok=True)
-    tmp = os.path.join(d, f".{os.path.basename(path)}.tmp{os.getpid()}")
-    try:
-        with open(tmp, "wb") as fh:
-            fh.write(data)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-    return path
+    from ..shapes.io import write_mesh
+
+    write_mesh(path, V, F, colors=colours, file_type="ply")
+    return str(path)

@@ -1,12 +1,17 @@
-"""Headless pictures of a mesh or point cloud with per-vertex values (issue 6 item 4).
+"""Headless pictures of a mesh or point cloud with per-vertex values.
 
-One PNG holds several views of the same shape side by side, one shared colour bar,
-and landmark markers in the style of the paper's Figure 6 (the first three red, the
-rest green, numbered in order).  Rendering is a painter's algorithm written on top of
-matplotlib's 2-D ``PolyCollection`` with the Agg backend: the shape is rotated into
-each view, projected orthographically, faces are sorted back to front and shaded by
-a headlight (Lambert, ``0.35 + 0.65 |n·v|``).  This is much faster than ``mplot3d``
+One picture holds several views of the same shape side by side, one shared colour
+bar, and landmark markers in the style of the paper's Figure 6 (the first three red,
+the rest green, numbered in order).  Rendering is a painter's algorithm written on
+top of matplotlib's 2-D ``PolyCollection``: the shape is rotated into each view,
+projected orthographically, faces are sorted back to front and shaded by a
+headlight (Lambert, ``0.35 + 0.65 |n·v|``).  This is much faster than ``mplot3d``
 (100k faces in a few seconds) and needs no display.
+
+Figures are ``matplotlib.figure.Figure`` objects made without pyplot, so drawing
+never changes the caller's backend (inline plots in Jupyter keep working):
+``draw_rows`` draws onto a Figure the caller passes (or a new one, returned);
+``render_png``/``render_rows`` write a PNG with the atomic writer.
 
 Values are either scalars ``(n,)`` mapped through a colour map, or colours
 ``(n, 3)``/``(n, 4)`` in [0, 1].  Faces take the mean of their vertices' values.
@@ -14,16 +19,13 @@ Values are either scalars ``(n,)`` mapped through a colour map, or colours
 
 from __future__ import annotations
 
-import os
-
 import matplotlib
+import numpy as np
+from matplotlib.collections import PolyCollection
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.collections import PolyCollection  # noqa: E402
-
-from ..errors import InputError  # noqa: E402
+from ..errors import InputError
+from ..output import atomic_open
 
 #: Default views as (elevation, azimuth) in degrees around the up axis: three-quarter
 #: front, both sides (a mirror ambiguity shows up as a left/right difference) and top.
@@ -91,13 +93,16 @@ def _vertex_colours(values, n, cmap, vmin, vmax):
     return np.asarray(rgba, dtype=float), sm
 
 
-def _vertex_normals(V, F):
-    fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    vn = np.zeros_like(V)
-    for k in range(3):
-        np.add.at(vn, F[:, k], fn)
-    ln = np.linalg.norm(vn, axis=1, keepdims=True)
-    return vn / np.where(ln > 0, ln, 1.0), fn
+def new_figure(figsize=(6.4, 4.8)) -> Figure:
+    """A matplotlib Figure that belongs to no pyplot state (the backend is untouched)."""
+    return Figure(figsize=figsize)
+
+
+def save_figure(fig: Figure, path, dpi: int = 110, bbox_inches="tight") -> str:
+    """Write ``fig`` as PNG to ``path`` with the atomic writer."""
+    with atomic_open(path) as fh:
+        fig.savefig(fh, format="png", dpi=dpi, bbox_inches=bbox_inches)
+    return str(path)
 
 
 def _draw_view(ax, V, F, rgba, R, landmarks, vnormals, fnormals, point_size, labels):
@@ -153,8 +158,9 @@ def render_png(
     labels: bool = True,
     extra=None,
     dpi: int = 110,
-) -> str:
-    """Render a shape from several views into one PNG (written atomically).
+    fig=None,
+):
+    """Render a shape from several views into one PNG (written atomically), or onto a Figure.
 
     Parameters
     ----------
@@ -178,27 +184,40 @@ def render_png(
         with ``project(points (k, 3)) -> (k, 3)`` taking points in the input's
         coordinates to screen x, screen y and depth; used by the witness picture.
 
+    fig : matplotlib Figure or None
+        Draw onto this Figure; with ``path=None`` the Figure (``fig`` or a new
+        one) is returned instead of writing a file.
+
     Returns
     -------
-    str
-        The path written.
+    str (the path written) or Figure (``path=None``)
     """
     row = dict(values=values, landmarks=landmarks, extra=extra, cmap=cmap, vmin=vmin,
                vmax=vmax, colorbar_label=colorbar_label, label=None)
     return render_rows(path, vertices, faces, [row], views=views, up=up, title=title,
-                       point_size=point_size, labels=labels, dpi=dpi)
+                       point_size=point_size, labels=labels, dpi=dpi, fig=fig)
 
 
 def render_rows(path, vertices, faces, rows, *, views=DEFAULT_VIEWS, up: str = "z",
                 title: str | None = None, point_size: float = 6.0, labels: bool = True,
-                dpi: int = 110) -> str:
-    """Several colourings of one shape, one row of views each, in one PNG.
+                dpi: int = 110, fig=None):
+    """Several colourings of one shape, one row of views each, in one PNG (or Figure).
 
     ``rows`` is a list of dicts with the keys of ``render_png`` (``values``,
     ``landmarks``, ``extra``, ``cmap``, ``vmin``, ``vmax``, ``colorbar_label``) and
     ``label`` (a caption written left of the row).  Each row with scalar values gets
-    its own colour bar.
+    its own colour bar.  With ``path=None`` the Figure is returned (see ``render_png``).
     """
+    fig = draw_rows(fig, vertices, faces, rows, views=views, up=up, title=title, point_size=point_size,
+                    labels=labels)
+    return fig if path is None else save_figure(fig, path, dpi)
+
+
+def draw_rows(fig, vertices, faces, rows, *, views=DEFAULT_VIEWS, up: str = "z", title: str | None = None,
+              point_size: float = 6.0, labels: bool = True) -> Figure:
+    """Draw the rows of ``render_rows`` onto ``fig`` (a new Figure when None) and return it."""
+    from ..deformation.energy import vertex_normals
+
     V = np.asarray(vertices, dtype=float)
     if V.ndim != 2 or V.shape[1] != 3 or V.shape[0] == 0:
         raise InputError("vertices must be a non-empty (n, 3) array")
@@ -210,10 +229,16 @@ def render_rows(path, vertices, faces, rows, *, views=DEFAULT_VIEWS, up: str = "
         raise InputError("at least one view is needed")
     centre, frame = V.mean(axis=0), _up_frame(up, V)
     V = (V - centre) @ frame.T
-    vn, fn = _vertex_normals(V, F) if F is not None else (None, None)
+    if F is not None:
+        vn = vertex_normals(V, F)
+        fn = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    else:
+        vn, fn = None, None
 
     nv, nr = len(views), len(rows)
-    fig, axes = plt.subplots(nr, nv, figsize=(3.4 * nv + 0.9, 3.6 * nr), squeeze=False)
+    if fig is None:
+        fig = new_figure(figsize=(3.4 * nv + 0.9, 3.6 * nr))
+    axes = fig.subplots(nr, nv, squeeze=False)
     for r, row in enumerate(rows):
         lms = [int(v) for v in row.get("landmarks", ())]
         if any(v < 0 or v >= n for v in lms):
@@ -237,19 +262,4 @@ def render_rows(path, vertices, faces, rows, *, views=DEFAULT_VIEWS, up: str = "
                 cb.set_label(row["colorbar_label"])
     if title:
         fig.suptitle(title, fontsize=10)
-    _save(fig, path, dpi)
-    return str(path)
-
-
-def _save(fig, path, dpi):
-    path = os.fspath(path)
-    d = os.path.dirname(os.path.abspath(path))
-    os.makedirs(d, exist_ok=True)
-    tmp = os.path.join(d, f".{os.path.basename(path)}.tmp{os.getpid()}.png")
-    try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight")
-        os.replace(tmp, path)
-    finally:
-        plt.close(fig)
-        if os.path.exists(tmp):
-            os.remove(tmp)
+    return fig

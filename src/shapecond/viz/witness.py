@@ -1,4 +1,4 @@
-"""The witness map drawn on the shape (issues 3 and 4, "pictures").
+"""The witness map drawn on the shape.
 
 The witness T of the global symmetry score (paper Eq. 5) is the near-isometry that
 makes the shape hard to match.  The picture has two rows of views:
@@ -21,21 +21,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..symmetry.starts import classical_mds
 from .render import DEFAULT_VIEWS, guess_up, render_rows
-
-
-def classical_mds(D: np.ndarray, dim: int = 3) -> np.ndarray:
-    """Classical MDS embedding (M, dim) of a distance matrix (Torgerson)."""
-    D = np.asarray(D, dtype=float)
-    m = D.shape[0]
-    J = np.eye(m) - 1.0 / m
-    B = -0.5 * J @ (D**2) @ J
-    w, U = np.linalg.eigh(B)
-    idx = np.argsort(w)[::-1][:dim]
-    X = U[:, idx] * np.sqrt(np.clip(w[idx], 0.0, None))
-    if X.shape[1] < dim:
-        X = np.hstack([X, np.zeros((m, dim - X.shape[1]))])
-    return X
 
 
 def position_colours(V: np.ndarray) -> np.ndarray:
@@ -46,7 +33,7 @@ def position_colours(V: np.ndarray) -> np.ndarray:
 
 
 def render_witness_png(shape, witness, path, *, landmarks=(), up: str | None = None,
-                       views=DEFAULT_VIEWS, max_segments: int = 80, title: str | None = None) -> str:
+                       views=DEFAULT_VIEWS, max_segments: int = 80, title: str | None = None, fig=None):
     """Draw a witness map on its shape (see the module docstring).
 
     Parameters
@@ -66,10 +53,12 @@ def render_witness_png(shape, witness, path, *, landmarks=(), up: str | None = N
     max_segments : int
         Number of the longest moves drawn as segments.
 
+    fig : matplotlib Figure or None
+        Draw onto it; with ``path=None`` the Figure is returned, nothing written.
+
     Returns
     -------
-    str
-        The path written.
+    str (the path written) or Figure (``path=None``)
     """
     D = np.asarray(shape.D, dtype=float)
     n = int(shape.n_samples)
@@ -110,4 +99,4 @@ def render_witness_png(shape, witness, path, *, landmarks=(), up: str | None = N
     ]
     point_size = 6.0 if F is not None or len(V) > 2000 else 30.0
     up = up or guess_up(geom)
-    return render_rows(path, V, F, rows, views=views, up=up, title=title, point_size=point_size)
+    return render_rows(path, V, F, rows, views=views, up=up, title=title, point_size=point_size, fig=fig)

@@ -1,0 +1,324 @@
+"""One place that parses and validates every value a user gives shapecond.
+
+The command line and the Python functions call the same checks, so the same
+bad value gets the same one-line ``InputError`` from both:
+
+* numbers: :func:`check_int`, :func:`check_float` (ranges, NaN, infinities,
+  overflow, booleans passed as numbers), :func:`check_seed`, :func:`check_choice`;
+* vertex ids: :func:`parse_ids` (``"3,5,9"``, a file of ids, or a sequence) and
+  :func:`read_ids` (a file: first column of each line, as BIM ``.pid`` files);
+* distance matrices: :func:`check_distance_matrix`, with the strictness of
+  :func:`scipy.spatial.distance.is_valid_dm` (square, symmetric, zero diagonal)
+  plus finite, real and non-negative entries;
+* point clouds: :func:`check_point_cloud` (finite (n, 3) coordinates that span
+  at least a plane).
+
+Examples
+--------
+>>> from shapecond.checks import check_float, parse_ids
+>>> parse_ids("12, 405,877")
+[12, 405, 877]
+>>> check_float(0.5, "alpha", lo=0, lo_open=True)
+0.5
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import weakref
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.distance import is_valid_dm
+
+from .errors import InputError
+
+#: Largest file of vertex ids read (a landmark file holds a few dozen lines).
+MAX_ID_FILE_BYTES = 16 * 2**20
+#: Largest vertex id (ids index int64 arrays).
+MAX_ID = 2**62
+#: Seeds are non-negative integers below 2**63 (numpy's ``default_rng``).
+MAX_SEED = 2**63 - 1
+#: Relative tolerance of symmetry and diagonal checks of a distance matrix:
+#: |D - Dᵀ| and |diag D| at most this fraction of the largest distance.
+DM_RTOL = 1e-8
+
+
+def _fmt(value) -> str:
+    text = repr(value) if isinstance(value, str) else str(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _num(v) -> str:
+    return str(v) if isinstance(v, int) else f"{v:g}"
+
+
+def _range_text(lo, hi, lo_open, hi_open) -> str:
+    if lo is not None and hi is not None:
+        return f"in {'(' if lo_open else '['}{_num(lo)}, {_num(hi)}{')' if hi_open else ']'}"
+    if lo is not None:
+        return f"{'>' if lo_open else '>='} {_num(lo)}"
+    if hi is not None:
+        return f"{'<' if hi_open else '<='} {_num(hi)}"
+    return "finite"
+
+
+def check_int(value, name: str, *, lo: int | None = None, hi: int | None = None) -> int:
+    """``value`` as an int in ``[lo, hi]``; ``InputError`` naming ``name`` otherwise.
+
+    Accepts Python and numpy integers and decimal strings (command line); refuses
+    booleans, floats (even integral ones: ``n_points=4.0`` is a slip) and NaN.
+    """
+    if isinstance(value, str):
+        text = value.strip()
+        try:
+            value = int(text, 10)
+        except ValueError:
+            raise InputError(f"{name} must be an integer, got {_fmt(value)}") from None
+    elif isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise InputError(f"{name} must be an integer, got {_fmt(value)}")
+    value = int(value)
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        raise InputError(f"{name} must be an integer {_range_text(lo, hi, False, False)}, got {value}")
+    return value
+
+
+def check_float(value, name: str, *, lo: float | None = None, hi: float | None = None,
+                lo_open: bool = False, hi_open: bool = False) -> float:
+    """``value`` as a finite float in the given range; ``InputError`` otherwise.
+
+    ``lo_open``/``hi_open`` exclude the end points (``lo=0, lo_open=True``: positive).
+    """
+    if isinstance(value, str):
+        try:
+            value = float(value.strip())
+        except ValueError:
+            raise InputError(f"{name} must be a number, got {_fmt(value)}") from None
+    elif isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise InputError(f"{name} must be a number, got {_fmt(value)}")
+    value = float(value)
+    bad = not math.isfinite(value)
+    if not bad and lo is not None:
+        bad = value <= lo if lo_open else value < lo
+    if not bad and hi is not None:
+        bad = value >= hi if hi_open else value > hi
+    if bad:
+        what = _range_text(lo, hi, lo_open, hi_open)
+        raise InputError(f"{name} must be a {'finite ' if what != 'finite' else ''}number"
+                         f"{'' if what == 'finite' else ' ' + what}, got {value:g}")
+    return value
+
+
+def check_seed(seed, name: str = "seed") -> int:
+    """A seed for ``numpy.random.default_rng``: an integer in [0, 2**63 - 1]."""
+    return check_int(seed, name, lo=0, hi=MAX_SEED)
+
+
+def check_choice(value, name: str, choices) -> str:
+    """``value`` if it is one of ``choices``; ``InputError`` listing them otherwise."""
+    if value not in choices:
+        raise InputError(f"{name} must be one of {', '.join(map(str, choices))}, got {_fmt(value)}")
+    return value
+
+
+# --- vertex ids --------------------------------------------------------------------
+
+def check_ids(values, name: str = "landmarks") -> list[int]:
+    """Non-negative, distinct integer ids from a sequence; ``InputError`` otherwise."""
+    out = []
+    for v in np.asarray(values, dtype=object).ravel() if isinstance(values, np.ndarray) else values:
+        if isinstance(v, (float, np.floating)) and math.isfinite(v) and float(v).is_integer():
+            v = int(v)
+        out.append(check_int(v, f"{name} id", lo=0, hi=MAX_ID))
+    seen = set()
+    for v in out:
+        if v in seen:
+            raise InputError(f"{name}: id {v} is repeated")
+        seen.add(v)
+    return out
+
+
+def read_ids(path, name: str | None = None) -> list[int]:
+    """Vertex ids from a text file: the first column of each non-empty line.
+
+    ``#`` starts a comment; columns may be separated by spaces, tabs or commas.
+    Refuses binary content, non-integer, negative, huge or repeated ids, an empty
+    file and files larger than ``MAX_ID_FILE_BYTES``, naming the file and line.
+    """
+    path = Path(path)
+    label = name or path.name
+    try:
+        size = path.stat().st_size
+        if not path.is_file():
+            raise InputError(f"{path}: not a regular file of vertex ids")
+        if size > MAX_ID_FILE_BYTES:
+            raise InputError(f"{label}: {size / 2**20:.0f} MB is too large for a file of vertex ids "
+                             f"(at most {MAX_ID_FILE_BYTES // 2**20} MB)")
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    if b"\0" in data:
+        raise InputError(f"{label}: binary data, not a text file of vertex ids")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(f"{label}: not UTF-8 text, expected one vertex id per line") from None
+    ids = []
+    for k, line in enumerate(text.splitlines(), 1):
+        line = line.split("#")[0].replace(",", " ").split()
+        if not line:
+            continue
+        tok = line[0]
+        try:
+            value = int(tok, 10)
+        except ValueError:
+            try:
+                f = float(tok)
+            except ValueError:
+                raise InputError(f"{label}:{k}: {_fmt(tok)} is not a vertex id") from None
+            if not (math.isfinite(f) and f.is_integer()):
+                raise InputError(f"{label}:{k}: {_fmt(tok)} is not an integer vertex id") from None
+            value = int(f)
+        if not 0 <= value <= MAX_ID:
+            raise InputError(f"{label}:{k}: {_fmt(tok)} is not a vertex id (0 .. {MAX_ID})")
+        ids.append(value)
+    if not ids:
+        raise InputError(f"{label}: no vertex ids found")
+    return check_ids(ids, label)
+
+
+def parse_ids(spec, name: str = "landmarks") -> list[int]:
+    """Vertex ids from ``"3,5,9"``, the path of a file of ids, or a sequence of ints.
+
+    ``None`` and ``""`` give ``[]``.  A string naming an existing file is read with
+    :func:`read_ids`.
+    """
+    if spec is None:
+        return []
+    if isinstance(spec, Path):
+        return read_ids(spec)
+    if not isinstance(spec, str):
+        if isinstance(spec, numbers.Integral):
+            return check_ids([spec], name)
+        try:
+            return check_ids(list(spec), name)
+        except TypeError:
+            raise InputError(f"{name} must be vertex ids, got {_fmt(spec)}") from None
+    text = spec.strip()
+    if not text:
+        return []
+    if len(text) < 4096 and Path(text).is_file():
+        return read_ids(text)
+    tokens = [t for t in text.replace(" ", "").split(",") if t]
+    ids = []
+    for tok in tokens:
+        try:
+            ids.append(int(tok, 10))
+        except ValueError:
+            raise InputError(f"{name}: {_fmt(tok)} is not a vertex id "
+                             "(expected e.g. 12,405,877 or a file of ids)") from None
+    return check_ids(ids, name)
+
+
+# --- distance matrices ---------------------------------------------------------------
+
+#: Matrices that passed :func:`check_distance_matrix`, by id; they are read-only
+#: copies owned here, so they cannot have changed since (searches re-check them
+#: in O(1)).
+_VALID: dict[int, weakref.ref] = {}
+
+
+def _known_valid(D) -> bool:
+    if not isinstance(D, np.ndarray) or D.flags.writeable or D.dtype != np.float64:
+        return False
+    base = D
+    while base is not None:
+        ref = _VALID.get(id(base))
+        if ref is not None and ref() is base:
+            # a leading principal block of a valid matrix (D[:k, :k]) is valid too
+            return base is D or (D.ndim == 2 and D.shape[0] == D.shape[1] and D.strides == base.strides
+                                 and D.__array_interface__["data"][0] == base.__array_interface__["data"][0])
+        base = base.base if isinstance(base.base, np.ndarray) else None
+    return False
+
+
+def _remember(D: np.ndarray) -> np.ndarray:
+    D.flags.writeable = False
+    key = id(D)
+    _VALID[key] = weakref.ref(D, lambda _, key=key: _VALID.pop(key, None))
+    return D
+
+
+def check_distance_matrix(D, name: str = "distance matrix", *, min_points: int = 2,
+                          distinct: bool = False) -> np.ndarray:
+    """A usable distance matrix: real, square, finite, non-negative, symmetric, zero diagonal.
+
+    Symmetry and the diagonal are checked by :func:`scipy.spatial.distance.is_valid_dm`
+    with tolerance ``DM_RTOL`` times the largest entry.  ``distinct`` also refuses
+    two different points at distance 0.  Returns a read-only float64 copy
+    symmetrised as (D + Dᵀ)/2 with an exactly zero diagonal; passing that copy
+    again is checked in O(1).
+    """
+    if _known_valid(D):
+        return D
+    arr = np.asarray(D)
+    if arr.ndim != 2 or arr.shape[0] != arr.shape[1]:
+        raise InputError(f"{name}: expected a square N x N matrix, got shape {arr.shape}")
+    if np.iscomplexobj(arr):
+        raise InputError(f"{name}: complex entries; distances are real numbers")
+    if not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+        raise InputError(f"{name}: entries are not numbers (dtype {arr.dtype})")
+    n = arr.shape[0]
+    if n < min_points:
+        raise InputError(f"{name}: needs at least {min_points} points, got {n}")
+    arr = np.array(arr, dtype=np.float64, order="C")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name}: contains NaN or infinite entries")
+    if np.any(arr < 0):
+        raise InputError(f"{name}: contains negative distances")
+    scale = float(arr.max())
+    if not scale > 0:
+        raise InputError(f"{name}: all distances are zero (zero diameter)")
+    if not is_valid_dm(arr, tol=DM_RTOL * scale):
+        if np.max(np.abs(np.diag(arr))) > DM_RTOL * scale:
+            raise InputError(f"{name}: has a non-zero diagonal")
+        raise InputError(f"{name}: is not symmetric")
+    if distinct and np.min(arr + np.eye(n) * scale) <= 0:
+        raise InputError(f"{name}: two distinct points are at distance zero")
+    out = 0.5 * (arr + arr.T)
+    np.fill_diagonal(out, 0.0)
+    return _remember(out)
+
+
+# --- point clouds --------------------------------------------------------------------
+
+#: Singular values of the centred points below this fraction of the largest one
+#: count as zero: a cloud must span a plane (two of them non-zero).
+RANK_RTOL = 1e-5
+
+
+def check_point_cloud(points, name: str = "point cloud", min_points: int = 3) -> np.ndarray:
+    """Finite (n, 3) coordinates spanning at least a plane; ``InputError`` otherwise.
+
+    Identical or collinear points have no surface to measure geodesics on (the
+    point-cloud heat method fails on them inside geometry-central).
+    """
+    V = np.asarray(points)
+    if np.iscomplexobj(V) or not np.issubdtype(V.dtype, np.number):
+        raise InputError(f"{name}: coordinates must be real numbers")
+    V = np.asarray(V, dtype=np.float64)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise InputError(f"{name}: expected an (n, 3) array of points, got shape {V.shape}")
+    if V.shape[0] < min_points:
+        raise InputError(f"{name}: needs at least {min_points} points, got {V.shape[0]}")
+    if not np.all(np.isfinite(V)):
+        raise InputError(f"{name}: {int(np.sum(~np.all(np.isfinite(V), axis=1)))} points have NaN "
+                         "or infinite coordinates")
+    C = V - V.mean(axis=0)
+    top = np.max(np.abs(C))
+    s = np.linalg.svd(C / top, compute_uv=False) if top > 0 else np.zeros(3)
+    if s[0] == 0 or s[1] <= RANK_RTOL * s[0]:
+        what = "identical" if s[0] == 0 else "collinear"
+        raise InputError(f"{name}: all {V.shape[0]} points are {what}; a shape needs points spanning a surface")
+    return V

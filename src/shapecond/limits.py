@@ -1,0 +1,118 @@
+"""Estimates of time and memory, checked before long computations start.
+
+A request that would take hours or exhaust memory is refused up front with its
+estimate and the option that forces it (``--force``, ``force=True``); one that
+takes more than a minute starts with a :class:`CostWarning` saying how long.
+The constants are per-unit costs measured on the 2-core reference machine
+(``benchmarks/RESULTS.md``, section "limits"); estimates are meant to be right
+within a small factor, which is all a refusal needs.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+from .errors import TooLargeError
+
+#: Refuse work estimated above this many seconds unless forced.
+MAX_SECONDS = 1800.0
+#: Warn (one line on stderr from the command line) above this many seconds.
+WARN_SECONDS = 60.0
+#: Refuse work estimated to need more memory than this unless forced.
+MAX_BYTES = 6 * 2**30
+
+#: Seconds per (source x vertex) of one geodesic solve, per backend; ``exact``
+#: grows like n^1.5 (MMP), so its constant multiplies n^1.5.
+GEODESIC_COST = {"heat": 5e-7, "fmm": 1.1e-6, "euclidean": 2.5e-8, "exact": 4e-7}
+#: Seconds of the default witness search at N = 400 samples, M = 3200 targets
+#: (``search_seconds`` scales it).
+SEARCH_SECONDS_400 = 12.0
+
+
+class CostWarning(UserWarning):
+    """A computation was started although it is estimated to take minutes."""
+
+
+def human_seconds(s: float) -> str:
+    if s < 120:
+        return f"{s:.0f} s"
+    if s < 7200:
+        return f"{s / 60:.0f} min"
+    return f"{s / 3600:.1f} h"
+
+
+def human_bytes(b: float) -> str:
+    return f"{b / 2**30:.1f} GB" if b >= 2**30 else f"{b / 2**20:.0f} MB"
+
+
+def check_cost(what: str, seconds: float = 0.0, nbytes: float = 0.0, force: bool = False,
+               hint: str = "use --force") -> None:
+    """Refuse (``TooLargeError``) or warn (``CostWarning``) according to the estimates."""
+    if not force and nbytes > MAX_BYTES:
+        raise TooLargeError(f"{what} needs about {human_bytes(nbytes)} of memory, more than the "
+                            f"{human_bytes(MAX_BYTES)} allowed; {hint}")
+    if not force and seconds > MAX_SECONDS:
+        raise TooLargeError(f"{what} would take about {human_seconds(seconds)} (limit "
+                            f"{human_seconds(MAX_SECONDS)}); {hint}")
+    if seconds > WARN_SECONDS:
+        warnings.warn(f"{what} will take about {human_seconds(seconds)}", CostWarning, stacklevel=3)
+
+
+def geodesic_seconds(n_vertices: int, n_sources: int, backend: str) -> float:
+    """Estimated seconds of ``n_sources`` distance solves on ``n_vertices`` vertices."""
+    per = GEODESIC_COST.get(backend, GEODESIC_COST["heat"])
+    size = n_vertices ** 1.5 if backend == "exact" else n_vertices
+    return per * size * n_sources
+
+
+def metric_bytes(n_targets: int, n_vertices: int) -> float:
+    """Peak bytes of sampling M targets: D and two working copies, plus the kept rows."""
+    return 3 * 8.0 * n_targets**2 + min(4.0 * n_targets * n_vertices, 512 * 2**20)
+
+
+def search_seconds(n_samples: int, n_targets: int | None = None, searches: float = 1.0) -> float:
+    """Estimated seconds of ``searches`` default-effort witness searches (N samples, M targets).
+
+    One move costs O(N M) and a search makes O(N) of them, so the time grows
+    like N² M from the measured N = 400, M = 3200 case.
+    """
+    m = 8 * n_samples if n_targets is None else n_targets
+    return searches * SEARCH_SECONDS_400 * (n_samples / 400.0) ** 2 * (m / 3200.0)
+
+
+def one_blas_thread():
+    """Context manager limiting BLAS to one thread (threadpoolctl).
+
+    The small dense products of the searches and of ARPACK lose time to BLAS
+    threads, and thrash when the cores are shared (20x measured with ARPACK).
+    """
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Make this worker process end when its parent does (Linux ``PR_SET_PDEATHSIG``).
+
+    Called at the start of every task run by a pool of worker processes, so that
+    killing the command (even with SIGKILL) does not leave its workers running.
+    A no-op where ``prctl`` is not available.
+    """
+    import ctypes
+    import os
+    import signal
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):  # pragma: no cover - not Linux
+        return
+    if os.getppid() != parent_pid:  # the parent died before the signal was armed
+        os._exit(1)
+
+
+def cap_jobs(n_jobs: int, n_tasks: int) -> int:
+    """At most one worker per task and per core (``os.cpu_count``), at least one."""
+    import os
+
+    return max(1, min(int(n_jobs), int(n_tasks), os.cpu_count() or 1))

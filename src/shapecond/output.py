@@ -1,0 +1,219 @@
+"""The one way shapecond writes a file: atomically, without following links, cleaned up on failure.
+
+Every output (``-o``, ``--png``, ``--ply``, ``--witness-png``, the evaluation's
+report, results and plots, the demo's pictures) and every cache entry is written
+by :func:`atomic_open`:
+
+* a **regular file** (or a path that does not exist yet) is written to an
+  unnamed temporary file in the target's folder (Linux ``O_TMPFILE``), which is
+  given a random name and renamed onto the target only once complete.  A process
+  killed while writing leaves no file behind and the previous output intact.
+  Where ``O_TMPFILE`` is not supported the temporary file is created under a
+  random name with ``O_CREAT | O_EXCL | O_NOFOLLOW``, as ``tempfile.mkstemp``
+  does (but with the umask's permissions rather than 0600), and removed on any
+  failure.  A symbolic link planted at a temporary name is never followed: the
+  name is skipped.  A symbolic link *at the target* is replaced by the new file;
+  the file it pointed to is not touched;
+* a **stream** (a FIFO, a character device such as ``/dev/null``, or a symbolic
+  link to one, e.g. ``/dev/stdout``) is written in one go once the content is
+  complete; it is never replaced by a regular file.  A FIFO nobody reads
+  (within ``FIFO_WAIT`` seconds) is refused in one line instead of blocking;
+* a failure (a full disk, no permission, a folder in the way) raises one
+  :class:`~shapecond.errors.OutputError` naming the file.
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> from shapecond.output import atomic_open
+>>> path = pathlib.Path(tempfile.mkdtemp()) / "out.txt"
+>>> with atomic_open(path, "w") as fh:
+...     _ = fh.write("done\\n")
+>>> path.read_text()
+'done\\n'
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import io
+import os
+import secrets
+import stat
+from pathlib import Path
+
+from .errors import OutputError
+
+_FLAGS = os.O_WRONLY | getattr(os, "O_CLOEXEC", 0)
+#: Write through an unnamed file (Linux O_TMPFILE) when the system has it.
+USE_TMPFILE = hasattr(os, "O_TMPFILE")
+
+
+def _temp_name(folder: Path, name: str) -> Path:
+    """A fresh random name beside the target (tests replace this to plant links)."""
+    return folder / f".{name}.{secrets.token_hex(8)}.tmp"
+
+
+def _reason(exc: OSError) -> str:
+    return exc.strerror or exc.__class__.__name__
+
+
+def _stream_kind(path: Path) -> str | None:
+    """"stream" for a FIFO/device (or a link to one), "folder", or None (file or missing)."""
+    try:
+        st = os.stat(path)  # follows links: /dev/stdout -> the pipe or terminal
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
+    if stat.S_ISDIR(st.st_mode):
+        return "folder"
+    if stat.S_ISFIFO(st.st_mode) or stat.S_ISCHR(st.st_mode) or stat.S_ISSOCK(st.st_mode):
+        return "stream"
+    return None
+
+
+def _open_temp(folder: Path, name: str):
+    """(fd, temporary path or None): an unnamed file in ``folder`` if the system allows it."""
+    if USE_TMPFILE:
+        try:
+            return os.open(folder, os.O_TMPFILE | _FLAGS, 0o666), None
+        except OSError as exc:
+            if exc.errno not in (errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL, errno.ENOENT):
+                raise
+    for _ in range(100):
+        tmp = _temp_name(folder, name)
+        try:
+            return os.open(tmp, _FLAGS | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o666), tmp
+        except FileExistsError:
+            continue
+    raise OSError(errno.EEXIST, "no free temporary name")
+
+
+def _publish(fd: int, tmp: Path | None, path: Path) -> None:
+    """Give the complete file its final name (link the unnamed file first)."""
+    if tmp is None:
+        folder = os.open(path.parent, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        try:
+            for _ in range(100):
+                candidate = _temp_name(path.parent, path.name)
+                try:  # linkat(AT_SYMLINK_FOLLOW) names the unnamed file; it never follows a link at candidate
+                    os.link(f"/proc/self/fd/{fd}", candidate.name, src_dir_fd=folder, dst_dir_fd=folder,
+                            follow_symlinks=True)
+                except FileExistsError:
+                    continue
+                tmp = candidate
+                break
+            else:
+                raise OSError(errno.EEXIST, "no free temporary name")
+        finally:
+            os.close(folder)
+    try:
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+#: Seconds to wait for a reader to open a FIFO before refusing to write to it.
+FIFO_WAIT = 3.0
+
+
+def _write_stream(path: Path, data: bytes) -> None:
+    import time
+
+    deadline = time.monotonic() + FIFO_WAIT
+    while True:
+        try:
+            fd = os.open(path, _FLAGS | os.O_NONBLOCK)  # never blocks: ENXIO while no process reads a FIFO
+            break
+        except OSError as exc:
+            if exc.errno == errno.ENXIO and time.monotonic() < deadline:
+                time.sleep(0.05)
+                continue
+            if exc.errno == errno.ENXIO:
+                raise OutputError(f"{path}: a FIFO that no process is reading; start the reader first") from None
+            raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
+    try:
+        os.set_blocking(fd, True)
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
+    finally:
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def atomic_open(path, mode: str = "wb", make_parents: bool = True):
+    """Open ``path`` for writing, atomically (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or path-like
+    mode : ``"wb"`` (binary file object) or ``"w"`` (UTF-8 text).
+    make_parents : create missing parent folders.
+
+    Yields
+    ------
+    A file object; the target appears (complete) only when the block ends
+    without an exception.
+    """
+    if mode not in ("wb", "w"):
+        raise ValueError("mode must be 'wb' or 'w'")
+    path = Path(os.fspath(path))
+    kind = _stream_kind(path)
+    if kind == "folder":
+        raise OutputError(f"{path}: is a folder, not a file")
+    if kind == "stream":
+        buffer = io.BytesIO()
+        handle = buffer if mode == "wb" else io.TextIOWrapper(buffer, encoding="utf-8", newline="")
+        yield handle
+        handle.flush()
+        _write_stream(path, buffer.getvalue())
+        return
+    folder = path.parent
+    try:
+        if make_parents:
+            folder.mkdir(parents=True, exist_ok=True)
+        elif not folder.is_dir():
+            raise OutputError(f"{path}: the folder {folder} does not exist")
+        fd, tmp = _open_temp(folder, path.name)
+    except OSError as exc:
+        raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
+    fh = os.fdopen(fd, "wb", closefd=False)
+    handle = fh if mode == "wb" else io.TextIOWrapper(fh, encoding="utf-8", newline="")
+    try:
+        try:
+            yield handle
+            handle.flush()
+            fh.flush()
+            _publish(fd, tmp, path)
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
+    except BaseException:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+        raise
+    finally:
+        with contextlib.suppress(OSError, ValueError):
+            handle.close()
+        with contextlib.suppress(OSError):
+            os.close(fd)
+
+
+def write_bytes(path, data: bytes, make_parents: bool = True) -> Path:
+    """Write ``data`` to ``path`` with :func:`atomic_open`; return the path."""
+    with atomic_open(path, "wb", make_parents) as fh:
+        fh.write(data)
+    return Path(path)
+
+
+def write_text(path, text: str, make_parents: bool = True) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` with :func:`atomic_open`; return the path."""
+    with atomic_open(path, "w", make_parents) as fh:
+        fh.write(text)
+    return Path(path)

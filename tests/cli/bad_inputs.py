@@ -1,0 +1,347 @@
+"""A table of malformed inputs and option values, generated in a folder (no data files needed).
+
+``make_files(folder)`` writes every bad file; ``cli_cases(folder)`` returns
+``(class, argv)`` pairs, each of which must end with exit status 2, one
+``error:`` line on stderr, no traceback and no file written; ``api_cases(folder)``
+returns ``(class, callable)`` pairs that must raise one ``InputError``.  Kept
+apart from the test so that the same table can be run against any build
+(``python tests/cli/bad_inputs.py SHAPECOND_EXECUTABLE``) to count how many of
+its cases a build handles.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import sys
+from pathlib import Path
+
+import numpy as np
+
+TETRA_V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+TETRA_F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+#: A small valid mesh argument and a cheap shape option set used around each bad value.
+GOOD = "demo:sphere:subdivisions=1"
+SMALL = ["--points", "8", "--no-cache"]
+
+
+def _off(V, F, extra=""):
+    return ("OFF\n" + f"{len(V)} {len(F)} 0\n" + "\n".join(" ".join(f"{x:g}" for x in v) for v in V) + "\n"
+            + "\n".join(f"3 {a} {b} {c}" for a, b, c in F) + "\n" + extra)
+
+
+def _ply_ascii(V, F, n_faces_declared=None, extra=""):
+    nf = len(F) if n_faces_declared is None else n_faces_declared
+    head = (f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\n"
+            f"property float z\nelement face {nf}\nproperty list uchar int vertex_indices\nend_header\n")
+    return head + "\n".join(" ".join(f"{x:g}" for x in v) for v in V) + "\n" + \
+        "\n".join(f"3 {a} {b} {c}" for a, b, c in F) + "\n" + extra
+
+
+def _ply_binary(V, F, n_faces_declared):
+    head = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(V)}\nproperty float x\n"
+            f"property float y\nproperty float z\nelement face {n_faces_declared}\n"
+            "property list uchar int vertex_indices\nend_header\n").encode()
+    body = b"".join(struct.pack("<3f", *v) for v in V) + b"".join(struct.pack("<B3i", 3, *f) for f in F)
+    return head + body
+
+
+def make_files(folder) -> dict:
+    """Write every bad (and one good) file into ``folder``; return name -> path."""
+    d = Path(folder)
+    d.mkdir(parents=True, exist_ok=True)
+    V, F = TETRA_V, TETRA_F
+    files = {
+        # landmark / id files
+        "ids_binary": b"\x00\xff\xfe\x01\x02",
+        "ids_latin1": b"\xe9t\xe9\n",
+        "ids_nan": "nan\n",
+        "ids_inf": "inf\n",
+        "ids_huge": f"{2**70}\n",
+        "ids_negative": "-3\n",
+        "ids_fraction": "1.5\n",
+        "ids_repeated": "1\n1\n",
+        "ids_empty_lines": "\n\n# nothing\n",
+        "ids_words": "left paw\n",
+        # meshes
+        "off_truncated_faces.off": _off(V, F[:1]).replace(f"4 1 0", "4 4 0"),
+        "off_truncated_vertices.off": "OFF\n4 4 0\n0 0 0\n1 0 0\n",
+        "off_trailing.off": _off(V, F, "garbage after the faces\n"),
+        "off_short_face.off": _off(V, F).replace("3 1 2 3", "3 1 2"),
+        "off_words.off": _off(V, F).replace("1 0 0", "one 0 0"),
+        "off_header_only.off": "OFF\n",
+        "off_not_off.off": "this is not a mesh\n",
+        "off_binary.off": b"\x00\x01\x02\x03" * 64,
+        "off_empty.off": "",
+        "off_bad_index.off": _off(V, np.vstack([F, [[1, 2, 9]]])),
+        "off_negative_counts.off": "OFF\n-4 2 0\n",
+        "off_nan.off": _off(np.vstack([V[:3], [[np.nan, 0, 1]]]), F),
+        "off_zero_area.off": _off(V, np.vstack([F, [[1, 1, 2]]])),
+        "off_disconnected.off": _off(np.vstack([V, V + 5]), np.vstack([F, F + 4])),
+        "off_huge_scale.off": _off(V * 1e200, F),
+        "off_tiny_scale.off": _off(V * 1e-200, F),
+        "ply_truncated.ply": _ply_ascii(V, F[:2], n_faces_declared=4),
+        "ply_trailing.ply": _ply_ascii(V, F, extra="1 2 3\n"),
+        "ply_binary_truncated.ply": _ply_binary(V, F[:1], 4),
+        "ply_garbage.ply": "ply\nthis is not a header\n",
+        "obj_short_face.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2\n",
+        "obj_missing_vertex.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n",
+        "obj_unknown.obj": "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nbanana 1 2\n",
+        "obj_short_vertex.obj": "v 0 0 0\nv 1 0\n",
+        "stl_truncated.stl": b"\0" * 80 + struct.pack("<I", 10) + b"\0" * 100,
+        "unknown_suffix.docx": "hello",
+        # point clouds and matrices
+        "cloud_collinear.xyz": "\n".join(f"{t:g} {2 * t:g} {3 * t:g}" for t in np.linspace(0, 1, 60)) + "\n",
+        "cloud_ragged.xyz": "0 0 0\n1 1\n",
+        "cloud_two_columns.xyz": "0 0\n1 1\n2 2\n",
+        "cloud_binary.xyz": b"\x00\x80" * 40,
+    }
+    out = {}
+    for name, content in files.items():
+        p = d / name
+        if isinstance(content, bytes):
+            p.write_bytes(content)
+        else:
+            p.write_text(content, encoding="utf-8")
+        out[name] = p
+    arrays = {
+        "cloud_identical.npy": np.ones((100, 3)),
+        "cloud_nan.npy": np.vstack([np.random.default_rng(0).random((40, 3)), [[np.nan, 0, 0]]]),
+        "cloud_small.npy": np.random.default_rng(1).random((10, 3)),
+        "matrix_complex.npy": (np.ones((5, 5)) - np.eye(5)) * (1 + 1j),
+        "matrix_asymmetric.npy": np.array([[0, 1, 2, 1], [1, 0, 1, 1], [3, 1, 0, 1], [1, 1, 1, 0.0]]),
+        "matrix_negative.npy": np.array([[0, -1, 2, 1], [-1, 0, 1, 1], [2, 1, 0, 1], [1, 1, 1, 0.0]]),
+        "matrix_nan.npy": np.array([[0, np.nan, 2, 1], [np.nan, 0, 1, 1], [2, 1, 0, 1], [1, 1, 1, 0.0]]),
+        "matrix_diagonal.npy": np.ones((4, 4)),
+        "matrix_zero.npy": np.zeros((4, 4)),
+        "matrix_duplicate_points.npy": np.array([[0, 0, 1, 1], [0, 0, 1, 1], [1, 1, 0, 1], [1, 1, 1, 0.0]]),
+        "matrix_two.npy": np.array([[0, 1], [1, 0.0]]),
+        "array_3x3_bad.npy": np.arange(9.0).reshape(3, 3),
+        "array_3d.npy": np.zeros((2, 2, 2)),
+        "array_strings.npy": np.array(["a", "b", "c"]),
+    }
+    for name, arr in arrays.items():
+        np.save(d / name, arr)
+        out[name] = d / name
+    np.savez(d / "npz_named.npy", D=np.ones((4, 4)) - np.eye(4))
+    os.replace(d / "npz_named.npy.npz", d / "npz_named.npy")
+    out["npz_named.npy"] = d / "npz_named.npy"
+    np.savez(d / "npz_without_D.npz", X=np.zeros(3))
+    out["npz_without_D.npz"] = d / "npz_without_D.npz"
+    (d / "a_folder.off").mkdir(exist_ok=True)
+    out["a_folder.off"] = d / "a_folder.off"
+    out["missing.off"] = d / "missing.off"
+    # symmetry maps
+    for name, content in {"sym_binary.sym": b"\x00\x01", "sym_zero.sym": "0\n1\n", "sym_fraction.sym": "1.5\n2\n",
+                          "sym_short.sym": "2\n1\n"}.items():
+        p = d / name
+        p.write_bytes(content) if isinstance(content, bytes) else p.write_text(content)
+        out[name] = p
+    # evaluation datasets: one bad file among good shapes
+    good = _off(V, F)
+    for kind, content in {"empty": "", "off_only": "OFF\n", "garbage": "not a mesh at all\n",
+                          "binary": b"\x00\xff" * 50}.items():
+        cls = d / f"dataset_{kind}" / "cls"
+        cls.mkdir(parents=True, exist_ok=True)
+        (cls / "shape0.off").write_text(good)
+        bad = cls / "shape1.off"
+        bad.write_bytes(content) if isinstance(content, bytes) else bad.write_text(content)
+        out[f"dataset_{kind}"] = d / f"dataset_{kind}"
+    return out
+
+
+#: Generated shapes with parameters out of range.
+BAD_DEMOS = ["demo:sphere:radius=0", "demo:sphere:radius=-1", "demo:sphere:radius=nan",
+             "demo:sphere:subdivisions=1.5", "demo:sphere:subdivisions=14", "demo:sphere:subdivisions=-1",
+             "demo:animal:delta=nan", "demo:animal:delta=inf", "demo:animal:resolution=5",
+             "demo:animal:resolution=0", "demo:torus:n_major=0", "demo:torus:minor=0", "demo:torus:minor=2",
+             "demo:plane:n=-3", "demo:cylinder:radius=0", "demo:blob:seed=-1", "demo:nosuchshape",
+             "demo:sphere:bogus=1", "demo:sphere:radius", "demo:sphere:radius=1,radius=2"]
+
+#: Files that are not a usable shape (keys of ``make_files``).
+BAD_SHAPES = ["off_truncated_faces.off", "off_truncated_vertices.off", "off_trailing.off", "off_short_face.off",
+              "off_words.off", "off_header_only.off", "off_not_off.off", "off_binary.off", "off_empty.off",
+              "off_bad_index.off", "off_negative_counts.off", "off_nan.off", "off_zero_area.off",
+              "off_disconnected.off", "off_huge_scale.off", "off_tiny_scale.off", "ply_truncated.ply",
+              "ply_trailing.ply", "ply_binary_truncated.ply", "ply_garbage.ply", "obj_short_face.obj",
+              "obj_missing_vertex.obj", "obj_unknown.obj", "obj_short_vertex.obj", "stl_truncated.stl",
+              "unknown_suffix.docx", "cloud_collinear.xyz", "cloud_ragged.xyz", "cloud_two_columns.xyz",
+              "cloud_binary.xyz", "cloud_identical.npy", "cloud_nan.npy", "matrix_complex.npy",
+              "matrix_asymmetric.npy", "matrix_negative.npy", "matrix_nan.npy", "matrix_diagonal.npy",
+              "matrix_zero.npy", "matrix_duplicate_points.npy", "matrix_two.npy", "array_3x3_bad.npy",
+              "array_3d.npy", "array_strings.npy", "npz_named.npy", "npz_without_D.npz", "a_folder.off",
+              "missing.off"]
+
+BAD_IDS = ["ids_binary", "ids_latin1", "ids_nan", "ids_inf", "ids_huge", "ids_negative", "ids_fraction",
+           "ids_repeated", "ids_empty_lines", "ids_words"]
+BAD_ID_TEXT = ["-1", "1,1", "a,b", "1.5", "nan", str(2**70), "3,,x"]
+
+#: (option, bad values, command line around it) for numeric options.
+BAD_OPTIONS = [
+    ("--seed", ["-1", "nan", "1.5", str(2**64)], ["score", GOOD] + SMALL),
+    ("--points", ["0", "-5", "abc", "2"], ["score", GOOD, "--no-cache"]),
+    ("--target-factor", ["0", "-1", "x"], ["score", GOOD] + SMALL),
+    ("--time-limit", ["0", "-1", "nan", "inf"], ["score", GOOD] + SMALL),
+    ("--alpha", ["0", "-1", "nan", "inf", "1e300", "1e16"], ["local", GOOD]),
+    ("--zero-tol", ["nan", "-1", "0", "1", "inf"], ["local", GOOD]),
+    ("--scale", ["inf", "0", "-1", "nan"], ["kappa", GOOD, "--points", "5", "--no-cache"]),
+    ("--trials", ["0", "-1", "1e3"], ["kappa", GOOD, "--points", "5", "--no-cache"]),
+    ("-k", ["-1", "x"], ["landmarks", GOOD, "--method", "fps"] + SMALL),
+    ("--resolve-fraction", ["2", "nan", "-0.5"], ["heatmap", GOOD] + SMALL + ["--png", "OUT.png"]),
+    ("--k", ["0", "-1"], ["match", GOOD, GOOD, "--landmarks-source", "1", "--landmarks-target", "1",
+                          "--points", "8", "--no-cache", "-o", "OUT.txt"]),
+    ("--jobs", ["0", "-3"], ["evaluate", "DATASET", "--out", "OUT_DIR"]),
+    ("--max-targets", ["-1", "0"], ["evaluate", "DATASET", "--out", "OUT_DIR"]),
+    ("--points", ["0", "-1"], ["evaluate", "DATASET", "--out", "OUT_DIR"]),
+    ("--delta", ["nan", "inf", "5"], ["demo", "--out", "OUT_DIR"]),
+    ("--landmark-points", ["1", "-1"], ["demo", "--out", "OUT_DIR"]),
+]
+
+#: Commands that read an INPUT, each with the arguments that make it cheap.
+SHAPE_COMMANDS = {
+    "info": lambda s: ["info", s],
+    "sample": lambda s: ["sample", s, "--points", "4", "--no-cache", "-o", "OUT.npz"],
+    "score": lambda s: ["score", s, "--no-cache", "--witness-png", "OUT.png"],
+    "kappa": lambda s: ["kappa", s, "--no-cache"],
+    "local": lambda s: ["local", s, "--heatmap-png", "OUT.png"],
+    "landmarks": lambda s: ["landmarks", s, "-k", "2", "--method", "fps", "--no-cache", "--png", "OUT.png"],
+    "heatmap": lambda s: ["heatmap", s, "--no-cache", "--png", "OUT.png"],
+    "match-source": lambda s: ["match", s, GOOD, "--landmarks-source", "0", "--landmarks-target", "0",
+                               "--no-cache", "-o", "OUT.txt"],
+    "match-target": lambda s: ["match", GOOD, s, "--landmarks-source", "0", "--landmarks-target", "0",
+                               "--no-cache", "-o", "OUT.txt"],
+}
+
+#: Commands that read vertex ids: (argv builder taking the ids argument).
+ID_COMMANDS = {
+    "sample --landmarks": lambda ids: ["sample", GOOD, "--landmarks", ids] + SMALL + ["-o", "OUT.npz"],
+    "score --landmarks": lambda ids: ["score", GOOD, "--landmarks", ids] + SMALL,
+    "kappa --landmarks": lambda ids: ["kappa", GOOD, "--landmarks", ids, "--points", "6", "--no-cache"],
+    "local --landmarks": lambda ids: ["local", GOOD, "--landmarks", ids],
+    "heatmap --landmarks": lambda ids: ["heatmap", GOOD, "--landmarks", ids] + SMALL + ["--png", "OUT.png"],
+    "landmarks --user-landmarks": lambda ids: ["landmarks", GOOD, "-k", "0", "--method", "user",
+                                               "--user-landmarks", ids] + SMALL,
+    "match --landmarks-source": lambda ids: ["match", GOOD, GOOD, "--landmarks-source", ids,
+                                             "--landmarks-target", "1", "--points", "8", "--no-cache",
+                                             "-o", "OUT.txt"],
+    "match --landmarks-target": lambda ids: ["match", GOOD, GOOD, "--landmarks-source", "1",
+                                             "--landmarks-target", ids, "--points", "8", "--no-cache",
+                                             "-o", "OUT.txt"],
+}
+
+
+def cli_cases(folder) -> list[tuple[str, list[str]]]:
+    """Every (class, argv) of the table; OUT* stand for paths in ``folder/out``."""
+    f = make_files(folder)
+    out = Path(folder) / "out"
+    cases = []
+
+    def add(cls, argv):
+        argv = [str(out / a) if a.startswith("OUT") else a for a in argv]
+        cases.append((cls, argv))
+
+    for name in BAD_SHAPES:
+        for cmd, build in SHAPE_COMMANDS.items():
+            if cmd == "info" and name in ("off_zero_area.off", "off_disconnected.off", "off_nan.off",
+                                          "off_bad_index.off", "off_huge_scale.off", "off_tiny_scale.off"):
+                continue  # info reports these as problems (exit 0) instead of refusing
+            add(f"shape file {name} / {cmd}", build(str(f[name])))
+    for spec in BAD_DEMOS:
+        for cmd, build in SHAPE_COMMANDS.items():
+            add(f"generated shape {spec} / {cmd}", build(spec))
+    for name in BAD_IDS:
+        for cmd, build in ID_COMMANDS.items():
+            add(f"id file {name} / {cmd}", build(str(f[name])))
+    for text in BAD_ID_TEXT:
+        for cmd, build in ID_COMMANDS.items():
+            add(f"id list {text!r} / {cmd}", build(text))
+    for option, values, base in BAD_OPTIONS:
+        for v in values:
+            argv = [str(f["dataset_garbage"].parent / "dataset_empty") if a == "DATASET" else a for a in base]
+            if argv[0] == "evaluate":  # a valid dataset so that only the option is wrong
+                good = Path(folder) / "dataset_good" / "cls"
+                good.mkdir(parents=True, exist_ok=True)
+                for k in range(2):
+                    (good / f"shape{k}.off").write_text(_off(TETRA_V, TETRA_F))
+                argv[1] = str(good.parent)
+            add(f"option {option} {v}", argv + [option, v])
+    for name in ("sym_binary.sym", "sym_zero.sym", "sym_fraction.sym", "sym_short.sym"):
+        add(f"symmetry map {name}", ["score", GOOD, "--symmetry-map", str(f[name])] + SMALL)
+    for kind in ("empty", "off_only", "garbage", "binary"):
+        add(f"evaluate dataset with a {kind} file", ["evaluate", str(f[f"dataset_{kind}"]), "--out", "OUT_DIR",
+                                                     "--no-cache"])
+    add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
+    add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
+    return cases
+
+
+def api_cases(folder) -> list[tuple[str, object]]:
+    """(class, zero-argument callable) pairs that must raise one ``InputError``."""
+    import shapecond as sc
+
+    f = make_files(folder)
+    V, F = TETRA_V, TETRA_F
+    cases = []
+    bad_inputs = [str(f[name]) for name in BAD_SHAPES] + BAD_DEMOS + [
+        np.array([[0, 1, 2], [1, 0, 1], [3, 1, 0.0]]), -(np.ones((4, 4)) - np.eye(4)), np.ones((100, 3)),
+        (np.vstack([V, [[np.nan, 0, 0]]]), F), (V, F + 10), (V, F.astype(float) + 0.5), "not a file.off", 42,
+        (V, np.array([["a", "b", "c"]])), np.zeros((0, 3)), object()]
+    funcs = {
+        "load": lambda x: sc.load(x),
+        "metric_shape": lambda x: sc.metric_shape(x, 8, cache=False),
+        "score": lambda x: sc.score(x, 8, cache=False),
+        "local_score": lambda x: sc.local_score(x),
+        "landmarks": lambda x: sc.landmarks(x, 2, "fps", 8, cache=False),
+        "heatmap": lambda x: sc.heatmap(x, n_points=8, cache=False),
+        "match": lambda x: sc.match(x, GOOD, [0], [0], n_points=8, cache=False),
+        "SymmetryProblem": lambda x: sc.SymmetryProblem(x, 8, cache=False),
+    }
+    for i, x in enumerate(bad_inputs):
+        for fname, fn in funcs.items():
+            cases.append((f"input {i} ({str(x)[:40]!r}) / {fname}", lambda fn=fn, x=x: fn(x)))
+    for text in BAD_ID_TEXT + [[1, 1], [-1], [1.5], [float("nan")], [2**70], "x"]:
+        cases.append((f"landmarks {text!r} / score", lambda t=text: sc.score(GOOD, 8, landmarks=t, cache=False)))
+        cases.append((f"landmarks {text!r} / local_score", lambda t=text: sc.local_score(GOOD, t)))
+    for name in BAD_IDS:
+        cases.append((f"id file {name} / score", lambda p=f[name]: sc.score(GOOD, 8, landmarks=p, cache=False)))
+    cases += [
+        ("n_points 0", lambda: sc.score(GOOD, 0, cache=False)),
+        ("n_points 4.0", lambda: sc.score(GOOD, 4.0, cache=False)),
+        ("seed -1", lambda: sc.score(GOOD, 8, seed=-1, cache=False)),
+        ("time_limit nan", lambda: sc.score(GOOD, 8, time_limit=float("nan"), cache=False)),
+        ("alpha 0", lambda: sc.local_score(GOOD, alpha=0)),
+        ("alpha 1e300", lambda: sc.local_score(GOOD, alpha=1e300)),
+        ("zero_tol nan", lambda: sc.local_score(GOOD, zero_tol=float("nan"))),
+        ("k -1", lambda: sc.landmarks(GOOD, -1, "fps", 8, cache=False)),
+        ("unknown method", lambda: sc.landmarks(GOOD, 2, "magic", 8, cache=False)),
+        ("unknown matcher", lambda: sc.match(GOOD, GOOD, [0], [0], matcher="magic", n_points=8, cache=False)),
+        ("resolve_fraction 2", lambda: sc.heatmap(GOOD, n_points=8, resolve_fraction=2, cache=False)),
+        ("unknown score option", lambda: sc.score(GOOD, 8, colour="red")),
+        ("evaluate garbage", lambda: sc.evaluate(f["dataset_garbage"], cache=False)),
+    ]
+    return cases
+
+
+def main(argv) -> int:  # pragma: no cover - a measuring tool, run by hand
+    """Run the CLI table against an executable; print the share handled as exit 2 + one line."""
+    import subprocess
+    import tempfile
+
+    exe = argv[1] if len(argv) > 1 else "shapecond"
+    with tempfile.TemporaryDirectory() as tmp:
+        cases = cli_cases(tmp)
+        ok = 0
+        for cls, args in cases:
+            p = subprocess.run([exe, *args], capture_output=True, text=True, timeout=600, stdin=subprocess.DEVNULL)
+            lines = p.stderr.strip().splitlines()
+            good = p.returncode == 2 and len(lines) == 1 and lines[0].startswith("error: ")
+            ok += good
+            if not good:
+                print(f"FAIL {cls}: exit {p.returncode}: {(lines or [''])[-1][:120]}")
+        print(f"{ok}/{len(cases)} cases handled ({100 * ok / len(cases):.0f} %)")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main(sys.argv))

@@ -1,0 +1,83 @@
+"""Every bad input gets one line: the table of ``bad_inputs`` through every sub-command and function.
+
+Each command-line case must end with exit status 2, exactly one ``error:``
+line on stderr (no traceback, no "internal failure"), nothing on stdout and no
+file written; each Python case must raise one ``InputError`` with a one-line
+message.
+"""
+
+import shutil
+
+import pytest
+
+from shapecond.errors import InputError
+from tests.conftest import run_cli
+
+
+def _table():
+    """The table module beside this file (imported by path: it is also a stand-alone tool)."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location("bad_inputs", Path(__file__).with_name("bad_inputs.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+api_cases, cli_cases = _table().api_cases, _table().cli_cases
+
+def test_the_table_covers_every_class_and_command(tmp_path):
+    CASES = cli_cases(tmp_path)
+    classes = {c.split(" ")[0] + " " + c.split(" ")[1] for c, _ in CASES}
+    assert len(CASES) >= 500
+    for kind in ("shape file", "generated shape", "id file", "id list", "option --seed", "option --alpha",
+                 "symmetry map", "evaluate dataset"):
+        assert any(c.startswith(kind) for c in classes), kind
+    commands = {argv[0] for _, argv in CASES}
+    assert commands == {"info", "sample", "score", "kappa", "local", "landmarks", "heatmap", "match", "evaluate",
+                        "demo"}
+
+
+def test_every_bad_command_line_is_one_error_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path / "cache"))
+    failures = []
+    for cls, argv in cli_cases(tmp_path):
+        out_dir = tmp_path / "out"
+        code, out, err = run_cli(capsys, *argv)
+        lines = err.strip().splitlines()
+        ok = (code == 2 and out == "" and len(lines) == 1 and lines[0].startswith("error: ")
+              and "Traceback" not in err and "internal failure" not in err)
+        written = sorted(p.name for p in out_dir.rglob("*")) if out_dir.exists() else []
+        shutil.rmtree(out_dir, ignore_errors=True)
+        if not ok or written:
+            failures.append(f"{cls}: exit {code}, stderr {err.strip()[:160]!r}, written {written}")
+    assert not failures, f"{len(failures)} cases:\n" + "\n".join(failures[:40])
+
+
+def test_every_bad_python_call_raises_one_input_error(tmp_path, monkeypatch):
+    monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path / "cache"))
+    failures = []
+    for cls, call in api_cases(tmp_path):
+        try:
+            call()
+        except InputError as exc:
+            if not str(exc) or "\n" in str(exc):
+                failures.append(f"{cls}: message {str(exc)!r}")
+        except Exception as exc:  # noqa: BLE001 - the point is to catch anything else
+            failures.append(f"{cls}: {exc.__class__.__name__}: {str(exc)[:120]}")
+        else:
+            failures.append(f"{cls}: no error")
+    assert not failures, f"{len(failures)} cases:\n" + "\n".join(failures[:40])
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["score", "demo:torus:minor=0"], "minor"),
+    (["score", "demo:plane:n=1000"], "--force"),
+    (["score", "demo:sphere:subdivisions=14"], "subdivisions must be an integer in [0, 8]"),
+    (["local", "demo:sphere:subdivisions=1", "--alpha", "0"], "--alpha must be"),
+    (["score", "demo:sphere:subdivisions=1", "--seed", "-1"], "--seed must be an integer"),
+])
+def test_messages_name_the_value_and_what_is_allowed(capsys, argv, needle):
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 2 and needle in err

@@ -1,0 +1,175 @@
+"""``import shapecond as sc``: one API for every input form, JSON-ready results, the README example."""
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import shapecond as sc
+from shapecond.errors import InputError
+from shapecond.shapes.io import write_mesh
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def _readme_example() -> str:
+    text = README.read_text()
+    section = text[text.index("## Python API"):]
+    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+
+
+def test_readme_example_is_three_lines_after_the_import():
+    lines = [ln for ln in _readme_example().splitlines() if ln.strip()]
+    assert lines[0] == "import shapecond as sc" and len(lines) == 4
+
+
+@pytest.mark.parametrize("form", ["path", "trimesh", "(V, F)"])
+def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(tmp_path, form):
+    g = sc.load("demo:animal:delta=0.2,resolution=0.06")
+    path = tmp_path / "animal.off"
+    write_mesh(path, g.vertices, g.faces)
+    shapes = {"path": str(path), "trimesh": trimesh.Trimesh(g.vertices, g.faces, process=False),
+              "(V, F)": (g.vertices, g.faces)}
+    code = _readme_example().replace('"cat0.off"', "SHAPE").replace("n_points=400", "n_points=24")
+    scope = {"SHAPE": shapes[form], "print": lambda *a: None}
+    exec(compile(code, "README.md", "exec"), scope)
+    result, marks = scope["result"], scope["marks"]
+    assert result.verdict and result.sigma[0] > 0 and len(marks.landmarks) == 5
+    assert all(0 <= v < g.n_vertices for v in marks.landmarks)
+    ref = sc.score(str(path), n_points=24)
+    assert result.sigma == ref.sigma and np.array_equal(result.witness_ids, ref.witness_ids)
+
+
+NON_SYMMETRIC = np.array([[0, 1, 2, 1.5], [1, 0, 1, 1], [2.5, 1, 0, 1], [1.5, 1, 1, 0]])
+NEGATIVE = -(np.ones((5, 5)) - np.eye(5))
+
+
+def _low_level():
+    from shapecond.landmarks.cnbs import heat_map
+    from shapecond.symmetry.condition import kappa_probes
+    from shapecond.symmetry.exact import exact_sigma
+    from shapecond.symmetry.paper_bound import paper_eigen_diagnostic
+    from shapecond.symmetry.relax import lp_upper_bound
+    from shapecond.symmetry.score import symmetry_score
+    from shapecond.symmetry.search import best_single_swap, witness_search
+
+    return {"symmetry_score": symmetry_score, "witness_search": witness_search, "exact_sigma": exact_sigma,
+            "lp_upper_bound": lp_upper_bound, "kappa_probes": kappa_probes, "heat_map": heat_map,
+            "best_single_swap": best_single_swap, "paper_eigen_diagnostic": paper_eigen_diagnostic}
+
+
+@pytest.mark.parametrize("bad", [NON_SYMMETRIC, NEGATIVE], ids=["non-symmetric", "negative"])
+def test_no_function_returns_a_number_for_an_invalid_matrix(bad):
+    calls = {name: (lambda f=f: f(bad)) for name, f in _low_level().items()}
+    calls.update({
+        "load": lambda: sc.load(bad), "metric_shape": lambda: sc.metric_shape(bad),
+        "score": lambda: sc.score(bad), "local_score": lambda: sc.local_score(bad),
+        "landmarks": lambda: sc.landmarks(bad, 1, "fps"), "heatmap": lambda: sc.heatmap(bad),
+        "match": lambda: sc.match(bad, bad, [0], [0]), "SymmetryProblem": lambda: sc.SymmetryProblem(bad),
+    })
+    for name, call in calls.items():
+        with pytest.raises(InputError) as info:
+            call()
+        assert str(info.value) and "\n" not in str(info.value), name
+
+
+def test_every_function_takes_a_trimesh_a_tuple_and_a_mesh_with_an_unreferenced_vertex():
+    g = sc.load("demo:sphere:subdivisions=2")
+    V = np.vstack([[[9.0, 9.0, 9.0]], g.vertices])  # row 0 is referenced by no face
+    F = g.faces + 1
+    forms = {"tuple": (V, F), "trimesh": trimesh.Trimesh(V, F, process=False)}
+    for name, x in forms.items():
+        loaded = sc.load(x)
+        assert loaded.n_vertices == g.n_vertices and loaded.ids[0] == 1, name
+        res = sc.score(x, 12, cache=False)
+        assert res.sigma == (np.inf, np.inf) and 0 not in set(res.witness_ids)
+        lm = sc.landmarks(x, 2, "fps", 12, cache=False)
+        assert 0 not in lm.landmarks and all(1 <= v <= g.n_vertices for v in lm.landmarks)
+        loc = sc.local_score(x, [1, 2])
+        assert loc.landmarks == (1, 2)
+        hm = sc.heatmap(x, n_points=12, cache=False)
+        assert hm.values.shape == (12,) and hm.best in set(hm.samples)
+        m = sc.match(x, x, [1, 5, 9], [1, 5, 9], n_points=20, cache=False)
+        assert m.map.shape == (g.n_vertices + 1,) and m.map[0] == -1 and m.map[1] == 1
+        with pytest.raises(InputError, match="not a vertex"):
+            sc.local_score(x, [0])
+
+
+def test_results_serialise_to_json_and_print_readably(tmp_path):
+    shape = "demo:animal:delta=0.1,resolution=0.06"
+    problem = sc.SymmetryProblem(shape, 20, cache=False)
+    results = [sc.score(shape, 20, cache=False), problem.score(), problem.heatmap(), problem.landmarks(2),
+               sc.local_score("demo:sphere:subdivisions=1"),
+               sc.match(shape, shape, [0, 50], [0, 50], n_points=20, cache=False),
+               sc.score("demo:sphere:subdivisions=1", 8, cache=False)]
+    for r in results:
+        text = json.dumps(r.to_dict(), allow_nan=False)
+        assert "Infinity" not in text and "NaN" not in text
+        assert len(repr(r)) < 400 and "array(" not in repr(r)
+    assert json.loads(json.dumps(results[-1].to_dict()))["sigma"]["lower"] == "inf"
+    assert "SymmetryProblem(animal, N=20" in repr(problem)
+
+
+def test_symmetry_problem_reuses_its_searches_and_agrees_with_the_one_off_functions():
+    shape = "demo:animal:delta=0.1,resolution=0.06"
+    problem = sc.SymmetryProblem(shape, 30, target="samples", cache=False)
+    first = problem.score()
+    kept = problem.search()
+    assert problem.search() is kept and first.sigma == sc.score(shape, 30, target="samples", cache=False).sigma
+    hm = problem.heatmap()
+    assert problem.search() is kept  # the heat map started from the kept search
+    after = problem.score(landmarks=[hm.best])
+    assert after.sigma[0] <= first.sigma[0] and after.landmarks == (hm.best,)
+    with pytest.raises(InputError, match="not one of the samples"):
+        problem.score(landmarks=[int(np.setdiff1d(np.arange(5000), problem.sample_ids)[0])])
+
+
+def test_pictures_draw_onto_a_figure_without_changing_the_backend():
+    code = """
+import matplotlib
+matplotlib.use("svg")
+import importlib, pkgutil, shapecond
+for m in pkgutil.walk_packages(shapecond.__path__, "shapecond."):
+    if not m.name.endswith("__main__"):
+        importlib.import_module(m.name)
+from matplotlib.figure import Figure
+r = shapecond.score("demo:sphere:subdivisions=1", 8, cache=False)
+fig = r.plot()
+mine = Figure()
+assert r.plot(fig=mine) is mine and isinstance(fig, Figure)
+print(matplotlib.get_backend())
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-500:]
+    assert out.stdout.strip() == "svg"
+
+
+def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
+    from tests.conftest import run_cli
+
+    path = tmp_path / "s.npz"
+    code, _, err = run_cli(capsys, "sample", "demo:blob:subdivisions=2", "--points", "12", "-o", path)
+    assert code == 0, err
+    D = sc.load(path)
+    with np.load(path) as z:
+        assert np.array_equal(D, z["D"])
+    assert sc.score(path).score.n_points == 12
+    code, out, err = run_cli(capsys, "score", path, "--json")
+    assert code == 0 and json.loads(out)["n_points"] == 12
+
+
+@pytest.mark.parametrize("scale", [1e-30, 1e20])
+def test_match_is_scale_free(scale):
+    """The same dense map for a mesh pair and its copy scaled by 1e-30 or 1e20."""
+    src = sc.load("demo:animal:delta=0.1,resolution=0.05")
+    tgt = sc.load("demo:animal:delta=0.3,resolution=0.05")
+    lm = [0, 600, 1200, 1800]
+    ref = sc.match((src.vertices, src.faces), (tgt.vertices, tgt.faces), lm, lm, n_points=60, cache=False)
+    got = sc.match((src.vertices * scale, src.faces), (tgt.vertices * scale, tgt.faces), lm, lm, n_points=60,
+                   cache=False)
+    assert np.mean(got.map == ref.map) > 0.999  # distance rows are float32: ties may round apart

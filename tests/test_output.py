@@ -1,0 +1,194 @@
+"""The one atomic writer: every output survives a kill, never follows a planted link, handles streams."""
+
+import os
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import textwrap
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import shapecond.output as output
+from shapecond.errors import OutputError
+from shapecond.output import atomic_open, write_bytes
+from tests.conftest import run_cli
+
+GOOD = "demo:sphere:subdivisions=2"
+
+
+def test_failure_inside_the_block_keeps_the_old_file_and_leaves_nothing(tmp_path):
+    target = write_bytes(tmp_path / "out.bin", b"old")
+    with pytest.raises(RuntimeError):
+        with atomic_open(target) as fh:
+            fh.write(b"half")
+            raise RuntimeError("boom")
+    assert target.read_bytes() == b"old" and os.listdir(tmp_path) == ["out.bin"]
+
+
+@pytest.mark.parametrize("tmpfile", [True, False], ids=["O_TMPFILE", "named temporary"])
+def test_killed_mid_write_keeps_the_previous_file_and_no_temporary(tmp_path, tmpfile):
+    """A child writes a new sample file and is SIGKILLed on its first write."""
+    target = tmp_path / "s.npz"
+    target.write_bytes(b"previous good file")
+    script = textwrap.dedent(f"""
+        import os, signal, sys
+        import shapecond.output as output
+        output.USE_TMPFILE = {tmpfile}
+        real = os.fdopen
+        class Killer:
+            def __init__(self, f): self.f = f
+            def write(self, data):
+                os.kill(os.getpid(), signal.SIGKILL)
+            def __getattr__(self, name): return getattr(self.f, name)
+        output.os.fdopen = lambda *a, **k: Killer(real(*a, **k))
+        from shapecond.cli import main
+        main(["sample", "{GOOD}", "--points", "10", "--no-cache", "-o", r"{target}"])
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=300)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr.decode()[-400:]
+    assert target.read_bytes() == b"previous good file"
+    leftovers = [p for p in os.listdir(tmp_path) if p != "s.npz"]
+    if tmpfile:
+        assert leftovers == []
+    else:  # a named temporary file cannot be removed by a process killed with SIGKILL
+        assert all(p.startswith(".s.npz.") and p.endswith(".tmp") for p in leftovers)
+
+
+WRITERS = {
+    "sample -o": lambda d: ["sample", GOOD, "--points", "10", "--no-cache", "-o", d / "s.npz"],
+    "match -o": lambda d: ["match", GOOD, GOOD, "--landmarks-source", "0", "--landmarks-target", "0",
+                           "--points", "10", "--no-cache", "-o", d / "m.txt"],
+    "score --witness-png": lambda d: ["score", GOOD, "--points", "10", "--no-cache", "--witness-png", d / "w.png"],
+    "landmarks --png --ply": lambda d: ["landmarks", GOOD, "-k", "2", "--method", "fps", "--points", "10",
+                                        "--no-cache", "--png", d / "l.png", "--ply", d / "l.ply"],
+    "heatmap --png --ply": lambda d: ["heatmap", GOOD, "--points", "10", "--no-cache", "--png", d / "h.png",
+                                      "--ply", d / "h.ply"],
+    "local --heatmap-png": lambda d: ["local", "demo:sphere:subdivisions=1", "--heatmap-png", d / "lh.png"],
+    "demo": lambda d: ["demo", "--points", "20", "--landmark-points", "10", "--out", d],
+    "cache (score)": lambda d: ["score", GOOD, "--points", "10"],
+}
+
+
+@pytest.mark.parametrize("name", list(WRITERS))
+@pytest.mark.parametrize("tmpfile", [True, False], ids=["O_TMPFILE", "named temporary"])
+def test_a_symlink_planted_at_the_temporary_name_is_never_followed(tmp_path, capsys, monkeypatch, name, tmpfile):
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    out = tmp_path / "out"
+    out.mkdir()
+    monkeypatch.setenv("SHAPECOND_CACHE", str(out))
+    monkeypatch.setattr(output, "USE_TMPFILE", tmpfile)
+    planted = []
+    real = output._temp_name
+
+    def plant_first(folder, base):
+        link = real(folder, base)
+        os.symlink(victim, link)  # the attacker guessed this name
+        planted.append(link)
+        monkeypatch.setattr(output, "_temp_name", real)
+        return link
+
+    monkeypatch.setattr(output, "_temp_name", plant_first)
+    code, _, err = run_cli(capsys, *WRITERS[name](out))
+    assert code == 0, err
+    assert victim.read_text() == "precious" and planted
+    written = [p for p in out.rglob("*") if p.is_file() and not p.is_symlink()]
+    assert written and all(p.stat().st_size > 0 for p in written)
+
+
+def test_a_symlink_at_the_target_is_replaced_not_followed(tmp_path):
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    link = tmp_path / "out.txt"
+    link.symlink_to(victim)
+    output.write_text(link, "new")
+    assert victim.read_text() == "precious" and not link.is_symlink() and link.read_text() == "new"
+
+
+def test_streams_are_written_not_replaced(tmp_path, capsys):
+    fifo = tmp_path / "fifo.npz"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(open(fifo, "rb").read()))
+    reader.start()
+    code, _, err = run_cli(capsys, "sample", GOOD, "--points", "10", "--no-cache", "-o", fifo)
+    reader.join(timeout=60)
+    assert code == 0, err
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and got and got[0][:2] == b"PK"  # a zip archive came through
+    link = tmp_path / "null.txt"
+    link.symlink_to(os.devnull)
+    code, _, err = run_cli(capsys, "match", GOOD, GOOD, "--landmarks-source", "0", "--landmarks-target", "0",
+                           "--points", "10", "--no-cache", "-o", link)
+    assert code == 0 and link.is_symlink() and stat.S_ISCHR(os.stat(link).st_mode)
+
+
+def test_a_fifo_nobody_reads_is_refused_in_one_line(tmp_path, capsys):
+    fifo = tmp_path / "lonely.npz"
+    os.mkfifo(fifo)
+    code, out, err = run_cli(capsys, "sample", GOOD, "--points", "10", "--no-cache", "-o", fifo)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "no process is reading" in err
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+
+
+def test_a_folder_or_a_missing_parent(tmp_path):
+    with pytest.raises(OutputError, match="is a folder"):
+        output.write_text(tmp_path, "x")
+    with pytest.raises(OutputError, match="does not exist"):
+        output.write_text(tmp_path / "no" / "x.txt", "x", make_parents=False)
+    assert output.write_text(tmp_path / "made" / "x.txt", "x").read_text() == "x"
+
+
+def _full_disk_command(folder: Path, argv) -> list[str] | None:
+    """argv run with a 64 kB tmpfs mounted at ``folder`` (a private mount namespace), or None."""
+    unshare = shutil.which("unshare")
+    if unshare is None:
+        return None
+    probe = subprocess.run([unshare, "-Urm", "sh", "-c", f"mount -t tmpfs -o size=64k tmpfs {folder}"],
+                           capture_output=True)
+    if probe.returncode != 0:
+        return None
+    cmd = " ".join(f"'{a}'" for a in argv)
+    return [unshare, "-Urm", "sh", "-c", f"mount -t tmpfs -o size=64k tmpfs {folder} && exec {cmd}"]
+
+
+def test_a_full_file_system_is_one_clean_error_and_no_partial_output(tmp_path):
+    folder = tmp_path / "small"
+    folder.mkdir()
+    target = folder / "s.npz"  # N = 120 samples: a 115 kB matrix does not fit in 64 kB
+    argv = [sys.executable, "-m", "shapecond", "sample", GOOD, "--points", "120", "--no-cache", "-o", str(target)]
+    env = dict(os.environ, SHAPECOND_CACHE=str(tmp_path / "cache"))
+    cmd = _full_disk_command(folder, argv)
+    if cmd is not None:  # a real full file system
+        proc = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300)
+        reason = "No space left on device"
+        listing = subprocess.run(["ls", "-A", str(folder)], capture_output=True, text=True).stdout
+    else:  # no mount namespace here: a file-size limit gives the same path through the writer (EFBIG)
+        import resource
+
+        def limit():
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (64 * 1024, 64 * 1024))
+
+        proc = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=300, preexec_fn=limit)
+        reason = "File too large"
+        listing = "\n".join(os.listdir(folder))
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, proc.stderr
+    assert len(lines) == 1 and lines[0].startswith("error: ") and reason in lines[0] and "s.npz" in lines[0]
+    assert "Traceback" not in proc.stderr and listing.strip() == ""
+    if cmd is None:
+        assert not target.exists()
+
+
+def test_the_cache_folder_is_written_through_the_writer(tmp_path, monkeypatch):
+    from shapecond import cache
+
+    monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path))
+    cache.save_arrays("x", "k" * 32, {"a": np.arange(3)})
+    assert cache.load_arrays("x", "k" * 32, {"a": (3,)})["a"].tolist() == [0, 1, 2]
+    assert [p.name for p in tmp_path.iterdir()] == [f"x-{'k' * 32}.npz"]
