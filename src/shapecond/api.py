@@ -167,8 +167,8 @@ def _split(kw: dict) -> tuple[dict, dict]:
 # --- scores --------------------------------------------------------------------------
 
 def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: bool = False,
-          time_limit: float | None = 10.0, effort: str = "default", **options):
-    """How hard ``x`` is to match: the σ bracket (paper Eq. 5), κ bracket, witness and verdict.
+          time_limit: float | None = 10.0, effort: str = "default", epsilon: float | None = None, **options):
+    """How hard ``x`` is to match: the σ bracket (paper Eq. 5), κ bracket, witness, δ(ε) and verdict.
 
     Parameters
     ----------
@@ -177,12 +177,14 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     exact : "auto" (exact σ when enumeration is quick), True or False.
     upper : LP upper bound when σ is not exact (N <= 16 free samples).
     time_limit : seconds for each of the exact and LP solves.
+    epsilon : distortion level of the scale-aware score δ(ε) (default: the median sample spacing).
     **options : ``seed``, ``force`` and the options of ``metric_shape``.
 
     Returns
     -------
     ScoreResult: ``.sigma``, ``.kappa``, ``.verdict``, ``.score`` (SymmetryScore),
-    ``.witness_ids``, ``.to_dict()`` (the JSON of ``shapecond score --json``), ``.plot()``.
+    ``.scale`` (ScaleScore, δ(ε)), ``.witness_ids``, ``.to_dict()`` (the JSON of
+    ``shapecond score --json``), ``.plot()``.
     """
     from .symmetry.report import score_shape
 
@@ -192,8 +194,11 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     shape = metric_shape(x, n_points, landmarks=landmarks, **shape_kw)
     if time_limit is not None:
         time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
+    if epsilon is not None:
+        epsilon = check_float(epsilon, "epsilon", lo=0.0)
     return score_shape(shape, parse_ids(landmarks), exact=exact, upper=upper, time_limit=time_limit,
-                       seed=check_seed(shape_kw.get("seed", 0)), effort=effort, force=shape_kw.get("force", False))
+                       seed=check_seed(shape_kw.get("seed", 0)), effort=effort, force=shape_kw.get("force", False),
+                       epsilon=epsilon)
 
 
 def require_mesh(g):
@@ -220,7 +225,8 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
 
 def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, user_landmarks=None,
               scores: bool | None = None, effort: str = "default", **options):
-    """``k`` landmarks chosen by ``method`` (cnbs, cnbs-local, fps, pls, hks, user), with σ after each.
+    """``k`` landmarks chosen by ``method`` (cnbs, cnbs-scale, cnbs-local, fps, pls, hks, user), with the
+    score after each (σ, or δ(ε) for cnbs-scale or ``score="scale"``).
 
     ``user_landmarks`` (input ids) are placed first among the samples and, for
     ``method="user"``, are the landmarks.  Other keyword arguments go to
@@ -247,10 +253,11 @@ class HeatMapResult:
 
     Attributes
     ----------
-    samples : (N,) input ids of the samples; ``values[i]`` is σ with ``samples[i]`` fixed
-        (NaN for the landmarks already fixed).
-    sigma_before : σ with only ``landmarks`` fixed.
-    best, best_value : the best next landmark and σ with it fixed.
+    samples : (N,) input ids of the samples; ``values[i]`` is the score with ``samples[i]``
+        fixed (NaN for the landmarks already fixed).
+    sigma_before : the score with only ``landmarks`` fixed.
+    best, best_value : the best next landmark and the score with it fixed.
+    score : "sigma" (σ, Eq. 5) or "scale" (δ(ε)).
     """
 
     samples: np.ndarray
@@ -261,12 +268,13 @@ class HeatMapResult:
     landmarks: tuple
     seconds: float
     shape: MetricShape = field(repr=False)
+    score: str = "sigma"
 
     def to_dict(self) -> dict:
         """The JSON object of ``shapecond heatmap --json``."""
-        return jsonable({"landmarks": list(self.landmarks), "sigma_before": self.sigma_before,
-                         "samples": self.samples, "values": self.values, "best": self.best,
-                         "best_value": self.best_value, "seconds": self.seconds})
+        return jsonable({"landmarks": list(self.landmarks), "score": self.score,
+                         "sigma_before": self.sigma_before, "samples": self.samples, "values": self.values,
+                         "best": self.best, "best_value": self.best_value, "seconds": self.seconds})
 
     def __repr__(self) -> str:
         return (f"HeatMapResult(N={self.samples.size}, sigma_before={self.sigma_before:.4g}, best={self.best}, "
@@ -284,10 +292,11 @@ class HeatMapResult:
 
 
 def heatmap(x, landmarks=(), n_points: int | None = None, *, effort: str = "default",
-            resolve_fraction: float | None = None, **options) -> HeatMapResult:
-    """σ with each sample fixed: where the next landmark helps most (CNBS heat map)."""
+            resolve_fraction: float | None = None, score: str = "sigma", epsilon: float | None = None,
+            **options) -> HeatMapResult:
+    """σ (or δ(ε), ``score="scale"``) with each sample fixed: where the next landmark helps most."""
     return SymmetryProblem(x, n_points, landmarks=landmarks, effort=effort, **options).heatmap(
-        landmarks, resolve_fraction=resolve_fraction)
+        landmarks, resolve_fraction=resolve_fraction, score=score, epsilon=epsilon)
 
 
 # --- matching and evaluation -----------------------------------------------------------
@@ -434,38 +443,43 @@ class SymmetryProblem:
                                                  effort=self.effort)
         return self._searches[key]
 
-    def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = 10.0):
+    def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = 10.0,
+              epsilon: float | None = None):
         """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search."""
-        from .symmetry.report import ScoreResult
-        from .symmetry.resolution import resolution_for_shape
-        from .symmetry.score import symmetry_score
-        from .symmetry.verdict import verdict
+        from .symmetry.report import score_shape
 
         ids = parse_ids(landmarks)
-        lm = list(self._indices(ids))
-        sc = symmetry_score(self.shape.D, self.shape.n_samples, lm, exact=exact, upper=upper, time_limit=time_limit,
-                            seed=self.seed, effort=self.effort, force=self.force, search=self.search(ids))
-        res = resolution_for_shape(self.shape, lm, seed=self.seed, effort=self.effort, score=sc)
-        return ScoreResult(sc, self.shape, res, verdict(sc, self.shape.D, res, self.shape.covering_radius),
-                           tuple(ids))
+        return score_shape(self.shape, ids, exact=exact, upper=upper, time_limit=time_limit, seed=self.seed,
+                           effort=self.effort, force=self.force, epsilon=epsilon, search=self.search(ids))
 
-    def heatmap(self, landmarks=(), *, resolve_fraction: float | None = None) -> HeatMapResult:
-        """σ with each sample fixed, warm-started from the kept search with ``landmarks`` fixed."""
+    def heatmap(self, landmarks=(), *, resolve_fraction: float | None = None, score: str = "sigma",
+                epsilon: float | None = None) -> HeatMapResult:
+        """σ (``score="sigma"``, warm-started from the kept search) or δ(ε) (``score="scale"``)
+        with each sample fixed, ``landmarks`` fixed already."""
+        import math
         import time
 
         from .landmarks.cnbs import RESOLVE_FRACTION, heat_map
+        from .symmetry.scale import budget_of, default_epsilon
 
         t0 = time.perf_counter()
         ids = parse_ids(landmarks)
         L = list(self._indices(ids))
         frac = RESOLVE_FRACTION if resolve_fraction is None else resolve_fraction
         frac = check_float(frac, "resolve_fraction", lo=0.0, hi=1.0)
-        hm = heat_map(self.shape.D, self.shape.n_samples, landmarks=L, base=self.search(ids), seed=self.seed,
-                      effort=self.effort, resolve_fraction=frac)
-        best = hm.argmin()
-        return HeatMapResult(np.asarray(self.shape.sample_ids), hm.values.copy(), float(hm.sigma_before),
-                             int(self.shape.sample_ids[best]), float(hm.values[best]), tuple(ids),
-                             time.perf_counter() - t0, self.shape)
+        n = self.shape.n_samples
+        if score not in ("sigma", "scale"):
+            raise InputError(f"unknown score {score!r}; choose sigma or scale")
+        budget, base, unit = None, self.search(ids), 1.0
+        if score == "scale":
+            eps = default_epsilon(self.shape.D, n) if epsilon is None else check_float(epsilon, "epsilon", lo=0.0)
+            budget, base, unit = budget_of(eps, n, self.shape.D), None, 1.0 / math.sqrt(n)
+        hm = heat_map(self.shape.D, n, landmarks=L, base=base, seed=self.seed, effort=self.effort,
+                      resolve_fraction=frac, budget=budget)
+        best = hm.argmin()  # values in the score's units: δ = sqrt(d²) / sqrt(N)
+        return HeatMapResult(np.asarray(self.shape.sample_ids), hm.values * unit, float(hm.sigma_before) * unit,
+                             int(self.shape.sample_ids[best]), float(hm.values[best]) * unit, tuple(ids),
+                             time.perf_counter() - t0, self.shape, score)
 
     def landmarks(self, k: int, method: str = "cnbs", *, fixed=(), scores: bool | None = None, **options):
         """``k`` new landmarks after ``fixed`` (input ids of samples); CNBS starts from the kept search."""

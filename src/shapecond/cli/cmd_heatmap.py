@@ -28,7 +28,7 @@ from .common import (Float, build_shape, emit_json, fmt, info, json_option, load
 @click.option("--score", "score", type=click.Choice(["sigma", "scale"]), default="sigma", show_default=True,
               help="sigma: the paper's σ with each point fixed; scale: the scale-aware δ(ε) "
                    "(the CNBS heat map of --method cnbs-scale).")
-@click.option("--epsilon", type=float, default=None,
+@click.option("--epsilon", type=Float(0.0), default=None,
               help="--score scale: distortion level ε [default: the median sample spacing].")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option

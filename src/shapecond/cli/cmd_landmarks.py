@@ -6,7 +6,7 @@ import click
 
 from ..landmarks import METHODS, SCORES, select_landmarks
 from ..limits import check_cost, search_seconds
-from .common import (Int, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
+from .common import (Float, Int, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
                      pop_shape_options, progress_enabled, shape_options)
 
 
@@ -53,7 +53,7 @@ def draw_landmarks(shape, result, png, ply, up, title):
 @click.option("--score", "score", type=click.Choice(SCORES), default=None,
               help="Score after each landmark: sigma (the paper's) or scale (δ(ε)) "
                    "[default: scale for cnbs-scale, sigma otherwise].")
-@click.option("--epsilon", type=float, default=None,
+@click.option("--epsilon", type=Float(0.0), default=None,
               help="Distortion level ε of the scale-aware score [default: the median sample spacing].")
 @click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the landmarks (PNG).")
 @click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh with landmarks painted (PLY).")
@@ -75,9 +75,10 @@ def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilo
                                      shape_kw.get("symmetry_map"), shape_kw.get("force", False))
     shape = build_shape(input_spec, landmarks=user_ids, loaded=loaded, **shape_kw)
     seed = shape_kw.get("seed", 0)
-    if method == "cnbs" or scores:  # CNBS: about 4 searches' worth per landmark (measured on TOSCA)
+    cnbs = method in ("cnbs", "cnbs-scale")
+    if cnbs or scores:  # CNBS: about 4 searches' worth per landmark (measured on TOSCA)
         check_cost(f"{method} with {k} landmarks at N = {shape.n_samples}",
-                   search_seconds(shape.n_samples, shape.n_targets, (4 if method == "cnbs" else 1) * max(k, 1)),
+                   search_seconds(shape.n_samples, shape.n_targets, (4 if cnbs else 1) * max(k, 1)),
                    force=shape_kw.get("force", False))
     kw = {}
     if method == "user":

@@ -333,7 +333,7 @@ def _json_float(v: float):
 
 def _check_landmark_entry(d) -> None:
     """Refuse a cached landmark selection that does not have the expected fields."""
-    for name in ("cls", "method", "vertices", "ids", "scores", "floor", "seconds"):
+    for name in ("cls", "method", "vertices", "ids", "scores", "floor", "scale", "seconds"):
         if name not in d:
             raise InputError(f"field {name!r} is missing")
     if len(d["vertices"]) != len(d["ids"]) or not all(isinstance(v, int) and v >= 0 for v in d["vertices"]):

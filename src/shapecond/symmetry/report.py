@@ -93,14 +93,15 @@ class ScoreResult:
 
 
 def score_shape(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                effort="default", force=False, epsilon=None) -> ScoreResult:
+                effort="default", force=False, epsilon=None, search=None) -> ScoreResult:
     """Score a ``MetricShape`` whose samples include the landmarks ``landmark_ids`` (input ids).
 
-    ``epsilon``: distortion level of δ(ε) (default ``symmetry.scale.default_epsilon``).
+    ``epsilon``: distortion level of δ(ε) (default ``symmetry.scale.default_epsilon``);
+    ``search``: a witness search already run with these landmarks (reused).
     """
     lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
     sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
-                        seed=seed, effort=effort, force=force)
+                        seed=seed, effort=effort, force=force, search=search)
     res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
     delta = scale_score(shape.D, shape.n_points, lm, epsilon, seed=seed, effort=effort,
                         starts=[sc.witness, *sc.maps])
