@@ -119,27 +119,13 @@ def markdown(ev, plots=()) -> str:
             "σ lower bounds with the landmarks fixed, every method scored by the same quick witness "
             "search (CNBS's own heat-map values are not used, so one estimator is compared). `*` marks a value equal to the best single swap "
             "avoiding the landmarks (the floor): there the score does not see the landmarks.", "",
-            "| class | L | " + " | ".join(f"{m} 1 / 3 / L" for m in methods) + " |",
-            "|---|---|" + "---|" * len(methods)]
-    for cls in classes:
-        L = st["landmark_counts"][cls]
-        cells = []
-        for m in methods:
-            sc, fl = scores.get((cls, m), {}), floors.get((cls, m), {})
-            cells.append(" / ".join(_fmt(sc.get(c)) + ("*" if _at_floor(sc.get(c), fl.get(c)) else "")
-                                    for c in sorted(sc)))
-        out.append(f"| {cls} | {L} | " + " | ".join(cells) + " |")
+            ] + _score_rows(st, scores, floors)
     scale = score_table(ev.landmarks, "scale")
     if any(scale.values()):
         out += ["", "## Scale-aware score δ(ε) after 1, 3 and all landmarks", "",
                 "RMS displacement of the widest self-map whose distortion (and that of every landmark's "
                 "distance row) stays within ε = the median sample spacing; quick search, the same for "
-                "every method.", "",
-                "| class | L | " + " | ".join(f"{m} 1 / 3 / L" for m in methods) + " |",
-                "|---|---|" + "---|" * len(methods)]
-        for cls in classes:
-            cells = [" / ".join(_fmt(v) for _, v in sorted(scale.get((cls, m), {}).items())) for m in methods]
-            out.append(f"| {cls} | {st['landmark_counts'][cls]} | " + " | ".join(cells) + " |")
+                "every method.", ""] + _score_rows(st, scale)
     for prot in protocols(ev):
         out += _error_sections(by_protocol(ev, prot), prot, scores)
     out += ["", "## Landmarks (null shape, file vertex ids)", ""]
@@ -148,6 +134,22 @@ def markdown(ev, plots=()) -> str:
     if plots:
         out += ["", "## Plots", ""] + [f"![{Path(p).stem}]({Path(p).name})" for p in plots]
     return "\n".join(out) + "\n"
+
+
+def _score_rows(st, table, floors=None) -> list[str]:
+    """A Figure 7a table: the score after 1, 3 and all landmarks per class and method; with
+    ``floors``, ``*`` marks a value equal to the best single swap avoiding the landmarks."""
+    methods = st["methods"]
+    out = ["| class | L | " + " | ".join(f"{m} 1 / 3 / L" for m in methods) + " |",
+           "|---|---|" + "---|" * len(methods)]
+    for cls in st["classes"]:
+        cells = []
+        for m in methods:
+            sc, fl = table.get((cls, m), {}), (floors or {}).get((cls, m), {})
+            cells.append(" / ".join(_fmt(sc.get(c)) + ("*" if _at_floor(sc.get(c), fl.get(c)) else "")
+                                    for c in sorted(sc)))
+        out.append(f"| {cls} | {st['landmark_counts'][cls]} | " + " | ".join(cells) + " |")
+    return out
 
 
 def _error_sections(ev, protocol, scores) -> list[str]:
