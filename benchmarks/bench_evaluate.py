@@ -1,14 +1,18 @@
-"""The paper's Figure 7 evaluation on TOSCA, timed, beside the paper's claims (issue 7).
+"""The paper's Figure 7 evaluation on TOSCA, timed, beside the paper's numbers and claims.
 
 Usage:
-    python benchmarks/bench_evaluate.py DATASET_DIR [--jobs 2] [--quick] [--out DIR]
-    python benchmarks/bench_evaluate.py --from DIR     # summarise an earlier run's results.json
+    python benchmarks/bench_evaluate.py DATASET_DIR [--jobs 2] [--protocol both] [--out DIR]
+    python benchmarks/bench_evaluate.py --from DIR [--dataset DATASET_DIR]   # summarise a run
 
-Runs ``shapecond.matching.evaluation.evaluate_dataset`` (the same as
-``shapecond evaluate``), writes the full report into --out, and puts a summary
-in benchmarks/RESULTS.md (section ``evaluate``): time, the score after 1/3/all
-landmarks, mean errors at 3 and all landmarks per matcher, Spearman's ρ, and
-for each claim of the paper (Figure 7, issue 7) whether the measurement agrees.
+Runs ``shapecond.matching.evaluation.evaluate_dataset`` (the same as ``shapecond
+evaluate``), writes the full report into --out, and puts a summary in
+benchmarks/RESULTS.md (section ``evaluate``): time and load, the scores σ and δ(ε)
+after 1/3/all landmarks, the mean errors per protocol and matcher beside the
+paper's Figure 7b, LH05's candidate recall and objective against the true map,
+Spearman's ρ between each score and the error, and every target of the κ-protocol
+and scale-aware-score work checked.  With ``--dataset`` (or a fresh run) it also
+tabulates the landmark spread, whether the first landmark is off the mirror plane,
+and the distortion of the ground-truth maps themselves (the data's own floor).
 """
 
 from __future__ import annotations
@@ -16,257 +20,252 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _results import command_line, machine, write_section  # noqa: E402
+from _results import command_line, machine, peak_rss_mb, write_section  # noqa: E402
 
 PAPER_ORDER = ["horse", "victoria", "michael", "david", "dog", "centaur", "cat", "wolf"]
+#: The paper's Figure 7b, LH05 with all landmarks: range over the landmark methods,
+#: % of half the geodesic diameter (as quoted in the evaluation issue).
+PAPER_LH05_ALL = {"horse": (0.61, 0.66), "victoria": (0.33, 0.39), "michael": (0.39, 0.42),
+                  "david": (0.31, 0.58), "dog": (0.43, 0.47), "centaur": (0.51, 0.59),
+                  "cat": (0.54, 0.56), "wolf": (0.21, 0.23)}
+NEW = "cnbs-scale"
 
 
 def _num(v):
     return math.inf if v == "inf" else (math.nan if v is None else float(v))
 
 
-def _f(v):
+def _f(v, d=3):
     v = _num(v)
-    return "inf" if math.isinf(v) else ("-" if math.isnan(v) else f"{v:.3g}")
+    return "inf" if math.isinf(v) else ("-" if math.isnan(v) else f"{v:.{d}g}")
 
 
-def _tables(data: dict):
-    """(scores, err): {(class, method): {count: σ}} and {(class, method, count, matcher): mean error}."""
-    scores = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d["scores"].items()}
-              for d in data["landmarks"]}
-    errs = {}
+def _mean(xs):
+    xs = [x for x in xs if x is not None and not math.isnan(x)]
+    return sum(xs) / len(xs) if xs else math.nan
+
+
+def tables(data: dict):
+    """scores σ, δ: {(class, method): {count: value}}; cells: {(protocol, class, method, count,
+    matcher): {field: mean over targets}}."""
+    sig = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d["scores"].items()} for d in data["landmarks"]}
+    dlt = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d.get("scale", {}).items()}
+           for d in data["landmarks"]}
+    acc = {}
     for r in data["records"]:
-        errs.setdefault((r["cls"], r["method"], r["n_landmarks"], r["matcher"]), []).append(r["error"])
-    return scores, {k: sum(v) / len(v) for k, v in errs.items()}
+        key = (r.get("protocol", "independent"), r["cls"], r["method"], r["n_landmarks"], r["matcher"])
+        for f in ("error", "exact", "recall", "objective_ratio", "seconds"):
+            acc.setdefault(key, {}).setdefault(f, []).append(_num(r.get(f)))
+    cells = {k: {f: _mean(v) for f, v in fs.items()} for k, fs in acc.items()}
+    return sig, dlt, cells
 
 
-def summarise(data: dict, wall: float | None) -> str:
+def _classes(st):
+    return [c for c in PAPER_ORDER if c in st["classes"]] + [c for c in st["classes"] if c not in PAPER_ORDER]
+
+
+def summarise(data: dict, wall: float | None, peak: float | None = None) -> str:
     st = data["settings"]
-    classes = [c for c in PAPER_ORDER if c in st["classes"]] + \
-        [c for c in st["classes"] if c not in PAPER_ORDER]
-    methods, matchers = st["methods"], st["matchers"]
-    scores, err = _tables(data)
+    classes, methods, matchers = _classes(st), st["methods"], st["matchers"]
+    prots = st.get("protocols", ["independent"])
+    sig, dlt, cells = tables(data)
     L = st["landmark_counts"]
-    lines = ["## Figure 7 evaluation on TOSCA (issue 7)", "",
-             f"Machine: {machine()}. Command: `{command_line()}`, summarising the run "
-             f"`shapecond evaluate {st['dataset']} --classes {','.join(st['classes'])} "
-             f"--methods {','.join(methods)} --jobs {st['n_jobs']}{' --quick' if st['quick'] else ''}`.",
-             "",
-             f"N = {st['n_points']}, {st['backend']} geodesics, methods {', '.join(methods)}, "
-             f"matchers {', '.join(matchers)}, jobs {st['n_jobs']}"
-             f"{', quick mode' if st['quick'] else ''}. Wall time: "
-             + (f"{wall / 60:.1f} min" if wall else "see the run") + "; phases (s): "
-             + ", ".join(f"{k} {v:.0f}" for k, v in data["seconds"].items()) + ".", "",
-             "Errors: mean geodesic error of the dense map at the target's samples, % of half the "
-             "target's geodesic diameter, averaged over the class's targets.", "",
-             "### Score after 1 / 3 / all landmarks (Figure 7a)", "",
-             "| class | L | " + " | ".join(methods) + " |", "|---|---|" + "---|" * len(methods)]
-    for c in classes:
-        lines.append(f"| {c} | {L[c]} | " + " | ".join(
-            " / ".join(_f(v) for _, v in sorted(scores.get((c, m), {}).items())) for m in methods) + " |")
-    for mt in matchers:
-        lines += ["", f"### Mean error with 3 / all landmarks, {mt} (Figure 7b)", "",
-                  "| class | " + " | ".join(methods) + " |", "|---|" + "---|" * len(methods)]
+    lines = ["## Figure 7 evaluation on TOSCA", "",
+             f"Machine: {machine()}; load average at the end {os.getloadavg()[0]:.1f}. Command: "
+             f"`{command_line()}`, summarising `shapecond evaluate {st['dataset']} --classes "
+             f"{','.join(st['classes'])} --methods {','.join(methods)} --protocol "
+             f"{'both' if len(prots) > 1 else prots[0]} --jobs {st['n_jobs']}`.", "",
+             f"N = {st['n_points']}, {st['backend']} geodesics, {sum(len(v) for v in st['targets'].values())} "
+             f"targets. Wall time: " + (f"{wall / 60:.1f} min" if wall else "see the run") + "; phases (s): "
+             + ", ".join(f"{k} {v:.0f}" for k, v in data["seconds"].items())
+             + (f"; peak memory {peak:.0f} MB (largest process)" if peak else "") + ".", "",
+             "Errors in % of half the target's geodesic diameter, averaged over the class's targets. "
+             "*corresponding*: the target is sampled at the null shape's sample vertices, the error of a "
+             "sample is the geodesic distance from its image to its own vertex (the κ setting); "
+             "*independent*: each target has its own FPS samples, the dense map is measured at them.", ""]
+    for name, tab in (("σ (Eq. 5, quick search)", sig), ("δ(ε) (scale-aware, quick search)", dlt)):
+        lines += [f"### Score {name} after 1 / 3 / all landmarks (Figure 7a)", "",
+                  "| class | L | " + " | ".join(methods) + " |", "|---|---|" + "---|" * len(methods)]
         for c in classes:
-            k3 = min(3, L[c])
-            lines.append(f"| {c} | " + " | ".join(
-                f"{_f(err.get((c, m, k3, mt)))} / {_f(err.get((c, m, L[c], mt)))}" for m in methods) + " |")
-        cor = data["correlation"].get(mt, {})
-        lines += ["", f"Spearman ρ(score, error), {mt}: {_f(cor.get('rho'))} "
-                  f"(p = {_f(cor.get('p'))}, {cor.get('n')} cells pooled over classes); "
-                  f"mean within-class ρ: {_f(cor.get('within_class'))}."]
-    lines += ["", "### Against the paper", ""] + claims(classes, methods, matchers, scores, err, L, data)
+            lines.append(f"| {c} | {L[c]} | " + " | ".join(
+                " / ".join(_f(v) for _, v in sorted(tab.get((c, m), {}).items())) for m in methods) + " |")
+        lines.append("")
+    for prot in prots:
+        for mt in matchers:
+            paper = prot == "corresponding" and mt == "lh05"
+            lines += [f"### Mean error with 3 / all landmarks, {prot} samples, {mt} (Figure 7b)", "",
+                      "| class | " + " | ".join(methods) + (" | paper LH05, all |" if paper else " |"),
+                      "|---|" + "---|" * (len(methods) + (1 if paper else 0))]
+            for c in classes:
+                k3 = min(3, L[c])
+                row = [f"{_f(cells.get((prot, c, m, k3, mt), {}).get('error'))} / "
+                       f"{_f(cells.get((prot, c, m, L[c], mt), {}).get('error'))}" for m in methods]
+                extra = ""
+                if paper:
+                    lo, hi = PAPER_LH05_ALL.get(c, (math.nan, math.nan))
+                    extra = f" | {lo:g}–{hi:g}"
+                lines.append(f"| {c} | " + " | ".join(row) + extra + " |")
+            means = [f"{_f(_mean([cells.get((prot, c, m, min(3, L[c]), mt), {}).get('error') for c in classes]))} / "
+                     f"{_f(_mean([cells.get((prot, c, m, L[c], mt), {}).get('error') for c in classes]))}"
+                     for m in methods]
+            lines.append("| **mean** | " + " | ".join(means) + (" | |" if paper else " |"))
+            cor = data.get("correlation_by_protocol", {}).get(prot, data["correlation"]).get(mt, {})
+            sc = cor.get("scale", {})
+            lines += ["", f"Spearman ρ(score, error), {mt}, {cor.get('n')} (class, method, count) cells: "
+                      f"σ: {_f(cor.get('rho'))} (p = {_f(cor.get('p'))}), within classes "
+                      f"{_f(cor.get('within_class'))}; δ(ε): {_f(sc.get('rho'))} (p = {_f(sc.get('p'))}), "
+                      f"within classes {_f(sc.get('within_class'))}.", ""]
+    lines += ["### Checks", ""] + checks(classes, methods, matchers, prots, sig, cells, L, data)
     return "\n".join(lines)
 
 
-def claims(classes, methods, matchers, scores, err, L, data) -> list[str]:
+def checks(classes, methods, matchers, prots, sig, cells, L, data) -> list[str]:
+    """Every measurable target of the κ-protocol, LH05 and scale-aware-score work."""
     out = []
-    if "cnbs" not in methods or "fps" not in methods:
-        return ["CNBS or FPS missing from this run: the paper's comparisons cannot be checked."]
-    tol = 1e-9  # scores equal to round-off are ties
-    low1 = [c for c in classes if all(scores.get((c, "cnbs"), {}).get(1, math.inf)
-                                      <= scores.get((c, m), {}).get(1, math.inf) * (1 + tol)
-                                      for m in methods)]
-    strict = [c for c in low1 if all(scores.get((c, "cnbs"), {}).get(1, math.inf)
-                                     < scores.get((c, m), {}).get(1, math.inf) * (1 - tol)
-                                     for m in methods if m != "cnbs")]
-    out.append(f"- Paper: after one landmark CNBS has the lowest score on every class. Measured: "
-               f"lowest or tied on {len(low1)} of {len(classes)} ({', '.join(low1) or 'none'}), "
-               f"strictly lowest on {len(strict)} ({', '.join(strict) or 'none'}) — "
-               f"{'agrees' if len(low1) == len(classes) else 'disagrees'}.")
+    prot = "corresponding" if "corresponding" in prots else prots[0]
+
+    def err(c, m, k, mt, field="error"):
+        return cells.get((prot, c, m, k, mt), {}).get(field, math.nan)
+
+    def cls_mean(c, k_of, mt, field="error"):
+        return _mean([err(c, m, k_of(c), mt, field) for m in methods])
+
+    allk, k3 = (lambda c: L[c]), (lambda c: min(3, L[c]))
+    if "lh05" in matchers and prot == "corresponding":
+        ok = [c for c in classes if c in PAPER_LH05_ALL and cls_mean(c, allk, "lh05") <= 1.5 * PAPER_LH05_ALL[c][1]]
+        out.append(f"- LH05, all landmarks, class mean within 1.5x the paper's Figure 7b (upper end): "
+                   f"{len(ok)} of {len(classes)} ({', '.join(ok) or 'none'}); target >= 6.")
+        if "faq" in matchers:
+            a = _mean([cls_mean(c, allk, "lh05") for c in classes] + [cls_mean(c, k3, "lh05") for c in classes])
+            b = _mean([cls_mean(c, allk, "faq") for c in classes] + [cls_mean(c, k3, "faq") for c in classes])
+            out.append(f"- Mean over classes, methods and counts: LH05 {_f(a)} %, FAQ {_f(b)} % "
+                       f"(ratio {_f(a / b if b else math.nan)}; target <= 1.2).")
+        rs = [r for r in data["records"] if r.get("protocol") == prot and r["matcher"] == "lh05"]
+        ratios = [_num(r.get("objective_ratio")) for r in rs]
+        below = [r for r in rs if _num(r.get("objective_ratio")) < 1 - 1e-9]
+        out.append(f"- LH05's objective over the true map's: min {_f(min(ratios, default=math.nan), 6)}, "
+                   f"below 1 in {len(below)} of {len(rs)} matchings"
+                   + (f" (worst: {', '.join(sorted({r['target'] for r in sorted(below, key=lambda r: _num(r['objective_ratio']))[:4]}))})"
+                      if below else "") + "; target: never.")
+        rec = {c: _mean([err(c, m, k3(c), "lh05", "recall") for m in methods]) for c in classes}
+        out.append("- LH05 candidate recall with 3 landmarks (class mean over methods): "
+                   + ", ".join(f"{c} {_f(v)}" for c, v in rec.items())
+                   + f"; min {_f(min(rec.values(), default=math.nan))} (target >= 0.95).")
     for mt in matchers:
-        le = [c for c in classes if err.get((c, "cnbs", min(3, L[c]), mt), math.inf)
-              <= err.get((c, "fps", min(3, L[c]), mt), -math.inf)]
-        need = math.ceil(6 * len(classes) / 8)
-        verdict = "agrees" if len(le) >= need else "disagrees"
-        out.append(f"- Paper: with 3 landmarks CNBS error at or below FPS on at least 6 of 8 classes. "
-                   f"{mt}: {len(le)} of {len(classes)} ({', '.join(le) or 'none'}) — {verdict}.")
-        gaps = []
-        for c in classes:
-            vals = [err.get((c, m, L[c], mt)) for m in methods if err.get((c, m, L[c], mt)) is not None]
-            vals3 = [err.get((c, m, min(3, L[c]), mt)) for m in methods
-                     if err.get((c, m, min(3, L[c]), mt)) is not None]
-            if vals and vals3:
-                gaps.append((max(vals) - min(vals), max(vals3) - min(vals3)))
-        if gaps:
-            a = sum(g[0] for g in gaps) / len(gaps)
-            b = sum(g[1] for g in gaps) / len(gaps)
-            out.append(f"- Paper: with all landmarks the methods come close. {mt}: mean spread "
-                       f"between methods {a:.2f} points with all landmarks vs {b:.2f} with 3 — "
-                       f"{'agrees' if a <= b else 'disagrees'}.")
-        rho = _num(data["correlation"].get(mt, {}).get("rho"))
-        p = _num(data["correlation"].get(mt, {}).get("p"))
-        out.append(f"- Paper: score and error positively rank-correlated. {mt}: ρ = {_f(rho)}, "
-                   f"p = {_f(p)} — {'agrees' if rho > 0 and p < 0.05 else 'disagrees (no significant positive correlation)'}.")
+        worse = [(c, m, err(c, m, L[c], mt) / err(c, m, k3(c), mt)) for c in classes for m in methods
+                 if err(c, m, k3(c), mt) > 0 and err(c, m, L[c], mt) > 1.05 * err(c, m, k3(c), mt)]
+        out.append(f"- {mt}: cells where all landmarks err more than 1.05x the first 3: {len(worse)} of "
+                   f"{len(classes) * len(methods)}" + (" (" + ", ".join(f"{c}/{m} x{_f(q)}" for c, m, q in worse)
+                                                      + ")" if worse else "") + ".")
+    if "cnbs" in methods and "fps" in methods:
+        for mt in matchers:
+            le = [c for c in classes if err(c, "cnbs", k3(c), mt) <= err(c, "fps", k3(c), mt)]
+            out.append(f"- Paper: with 3 landmarks CNBS error at or below FPS on >= 6 of 8 classes. {mt}: "
+                       f"{len(le)} of {len(classes)} ({', '.join(le) or 'none'}).")
+    if NEW in methods:
+        for mt in matchers:
+            beats = [c for c in classes if all(err(c, NEW, k3(c), mt) <= err(c, b, k3(c), mt) for b in ("fps", "pls")
+                                               if b in methods)]
+            avg3 = {m: _mean([err(c, m, k3(c), mt) for c in classes]) for m in methods}
+            avgL = {m: _mean([err(c, m, L[c], mt) for c in classes]) for m in methods}
+            best3, bestL = min(avg3, key=avg3.get), min(avgL, key=avgL.get)
+            out.append(f"- {NEW}, {mt}, 3 landmarks: at or below FPS and PLS on {len(beats)} of {len(classes)} "
+                       f"({', '.join(beats) or 'none'}; target >= 6); mean over classes {_f(avg3[NEW])} "
+                       f"(lowest: {best3} {_f(avg3[best3])}); all landmarks {_f(avgL[NEW])} vs best {bestL} "
+                       f"{_f(avgL[bestL])} (x{_f(avgL[NEW] / avgL[bestL] if avgL[bestL] else math.nan)}; "
+                       f"target <= 1.1).")
+        for mt in matchers:
+            sc = data.get("correlation_by_protocol", {}).get(prot, data["correlation"]).get(mt, {}).get("scale", {})
+            out.append(f"- δ(ε) predicts the error ({mt}): ρ = {_f(sc.get('rho'))}, p = {_f(sc.get('p'))} "
+                       f"(target ρ >= 0.6, p < 0.01); mean within-class ρ {_f(sc.get('within_class'))}.")
     return out
 
 
-def dense_table(dataset: Path, cls: str = "cat", n_points: int = 400) -> str:
-    """Dense extension methods compared on one pair (null shape -> next shape), FPS landmarks."""
-    from shapecond.matching.evaluation import class_shapes
-    from shapecond.matching.metrics import errors_from_rows, normalise
-    from shapecond.matching.pipeline import match_surfaces
-    from shapecond.matching.sampled import sample_surface
-    from shapecond.shapes.io import load_geometry
-    from shapecond.shapes.metric import metric_shape
-
-    paths = class_shapes(Path(dataset) / cls)
-    src_g, tgt_g = load_geometry(paths[0]), load_geometry(paths[1])
-    src, tgt = sample_surface(src_g, n_points), sample_surface(tgt_g, n_points)
-    shape = metric_shape(src_g, n_points)
-    lm = [int(v) for v in shape.samples[:7]]
-    rows = [f"### Dense extension, {paths[0].stem} -> {paths[1].stem} (FPS landmarks)", "",
-            "| matcher | landmarks | sample map | dense: nearest sample | dense: local distances | seconds |",
-            "|---|---|---|---|---|---|"]
-    for matcher in ("lh05", "faq"):
-        for c in (3, 7):
-            e = {}
-            for dense in ("nearest", "distances"):
-                t0 = time.perf_counter()
-                m = match_surfaces(src, tgt, lm[:c], lm[:c], matcher=matcher, dense=dense)
-                sec = time.perf_counter() - t0
-                e[dense] = normalise(errors_from_rows(tgt.rows, m.vertex_map[tgt.samples]),
-                                     tgt.diameter).mean()
-                e["sample"] = normalise(errors_from_rows(m.target.rows[m.sample_map.t],
-                                                         m.source.samples), tgt.diameter).mean()
-            rows.append(f"| {matcher} | {c} | {e['sample']:.2f} | {e['nearest']:.2f} | "
-                        f"{e['distances']:.2f} | {sec:.1f} |")
-    return "\n".join(rows)
-
-
-def dense_scores(data: dict, dataset: Path, out: Path, effort: str = "quick") -> str:
-    """σ with dense targets (M = 8N, DESIGN.md 1) for every landmark set of a run, and its
-    rank correlation with the matching error: does it predict the error better than the
-    bijection score of Figure 7a, which a two-sample swap dominates?  Cached in
-    ``out/dense_scores.json`` (one dense metric shape per null shape, then ~5 s a score)."""
-    from scipy.stats import spearmanr
-
-    from shapecond.matching.evaluation import class_shapes
-    from shapecond.shapes.io import load_geometry
-    from shapecond.shapes.metric import metric_shape
-    from shapecond.symmetry.search import witness_search
-
-    st = data["settings"]
-    path = out / "dense_scores.json"
-    done = json.loads(path.read_text()) if path.exists() else {}
-    by_cls = {}
-    for d in data["landmarks"]:
-        by_cls.setdefault(d["cls"], []).append(d)
-    for cls, ds in by_cls.items():
-        need = [(d, int(c)) for d in ds for c in d["scores"] if f"{cls}/{d['method']}/{c}" not in done]
-        if not need:
-            continue
-        print(f"[dense scores] {cls}", file=sys.stderr, flush=True)
-        g = load_geometry(class_shapes(Path(dataset) / cls)[0])
-        shape = metric_shape(g, st["n_points"], backend=st["backend"], seed=st["seed"], target="dense")
-        for d, c in need:
-            idx = shape.landmark_indices(d["ids"][:c])
-            r = witness_search(shape.D, shape.n_samples, [int(i) for i in idx], seed=st["seed"], effort=effort)
-            done[f"{cls}/{d['method']}/{c}"] = "inf" if math.isinf(r.sigma) else r.sigma
-            path.write_text(json.dumps(done, indent=1))
-    scores, err = _tables(data)
-    lines = [f"### Dense-target score against error (N = {st['n_points']}, M = 8N, {effort} search)", "",
-             "The same landmark sets scored with dense targets (maps may send a sample to any of 8N "
-             "points, so a swap of two neighbouring samples no longer dominates); cells are (class, "
-             "method, 3 or all landmarks) as above.", "",
-             "| matcher | ρ bijection score | ρ dense score | cells | mean within-class ρ, dense |",
-             "|---|---|---|---|---|"]
-    for mt in st["matchers"]:
-        xb, xd, ys, per = [], [], [], {}
-        for (cls, m, c, mm), e in err.items():
-            key = f"{cls}/{m}/{c}"
-            if mm != mt or key not in done:
-                continue
-            xb.append(scores.get((cls, m), {}).get(c, math.nan))
-            xd.append(_num(done[key]))
-            ys.append(e)
-            per.setdefault(cls, []).append((_num(done[key]), e))
-        rb = spearmanr(xb, ys) if len(ys) > 2 else None
-        rd = spearmanr(xd, ys) if len(ys) > 2 else None
-        within = [spearmanr(*zip(*v)).statistic for v in per.values()
-                  if len(v) > 2 and len({a for a, _ in v}) > 1 and len({b for _, b in v}) > 1]
-        lines.append(f"| {mt} | {_f(rb.statistic if rb else None)} (p = {_f(rb.pvalue if rb else None)}) | "
-                     f"{_f(rd.statistic if rd else None)} (p = {_f(rd.pvalue if rd else None)}) | {len(ys)} | "
-                     f"{_f(sum(within) / len(within) if within else None)} |")
-    return "\n".join(lines)
-
-
-def spread_table(data: dict, dataset: Path) -> str:
-    """How spread out each method's landmarks are: the median geodesic distance from a
-    landmark to its nearest other landmark, in diameters (1 = the shape's diameter), beside
-    the sampling's covering radius r.  CNBS on the bijection score fixes swaps of adjacent
-    samples once the mirror is broken, so its landmarks come in clusters of neighbours."""
+def geometry_tables(data: dict, dataset: Path) -> str:
+    """Landmark spread, first landmark against the mirror plane, and the ground truth's own distortion."""
     import numpy as np
 
     from shapecond.matching.evaluation import class_shapes
-    from shapecond.shapes.io import load_geometry
+    from shapecond.matching.sampled import sample_surface, surface_at
+    from shapecond.shapes.io import load_geometry, read_symmetry_map
     from shapecond.shapes.metric import metric_shape
 
     st = data["settings"]
     methods = st["methods"]
-    lines = ["### Landmark spread (all landmarks, null shape)", "",
-             "Median over landmarks of the geodesic distance to the nearest other landmark, in "
-             "diameters; r = covering radius of the N samples.", "",
-             "| class | L | r | " + " | ".join(methods) + " |", "|---|---|---|" + "---|" * len(methods)]
     sets = {(d["cls"], d["method"]): d["ids"] for d in data["landmarks"]}
-    for cls in [c for c in PAPER_ORDER if c in st["classes"]] + [c for c in st["classes"] if c not in PAPER_ORDER]:
-        g = load_geometry(class_shapes(Path(dataset) / cls)[0])
+    spread = ["### Landmark spread (all landmarks, null shape)", "",
+              "Median over landmarks of the geodesic distance to the nearest other landmark, in covering "
+              "radii r of the N samples (r in diameters). `|` marks a first landmark within 2r of its mirror "
+              "image (on the mirror plane, where it leaves the mirror map feasible; classes with a `.sym` map).", "",
+              "| class | L | r | " + " | ".join(methods) + " |", "|---|---|---|" + "---|" * len(methods)]
+    gt = ["### The ground truth's own distortion (corresponding samples)", "",
+          "Distortion of the true map between the null shape's N samples and the same vertices of each "
+          "target: RMS over pairs in sample spacings h (the default ε of δ), and the median relative "
+          "distortion |D − D̃| / D.  Where the true map distorts more, a distortion-minimising matcher "
+          "may prefer a wrong map.", "",
+          "| class | targets | RMS / h (median, max) | median relative |", "|---|---|---|---|"]
+    for cls in _classes(st):
+        paths = class_shapes(Path(dataset) / cls)
+        g = load_geometry(paths[0])
         shape = metric_shape(g, st["n_points"], backend=st["backend"], seed=st["seed"])
+        r = shape.covering_radius
+        sym = None
+        sym_file = Path(dataset) / "symmetries" / f"{cls}.sym"
+        if sym_file.exists():
+            sym = g.with_symmetry(read_symmetry_map(sym_file)).symmetry
         cells = []
         for m in methods:
             idx = shape.landmark_indices(sets[(cls, m)])
             S = shape.D[np.ix_(idx, idx)].copy()
             np.fill_diagonal(S, np.inf)
-            cells.append(f"{np.median(S.min(axis=1)):.3f}")
-        r = shape.covering_radius
-        lines.append(f"| {cls} | {len(sets[(cls, methods[0])])} | {_f(r)} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+            mark = ""
+            if sym is not None:
+                v = int(shape.samples[idx[0]])
+                src = sample_surface(g, st["n_points"], st["backend"], st["seed"])
+                row = np.flatnonzero(src.samples == v)
+                d = (src.rows[row[0], sym[v]] / src.rows.max()) if row.size else math.nan
+                mark = " |" if d < 2 * r else ""
+            cells.append(f"{np.median(S.min(axis=1)) / r:.1f}{mark}")
+        spread.append(f"| {cls} | {len(sets[(cls, methods[0])])} | {_f(r)} | " + " | ".join(cells) + " |")
+        null = sample_surface(g, st["n_points"], st["backend"], st["seed"])
+        Ds = null.D
+        h = np.median((Ds + np.diag(np.full(len(Ds), np.inf))).min(axis=1))
+        iu = np.triu_indices(len(Ds), 1)
+        rms, rel = [], []
+        for p in paths[1:]:
+            if p.stem not in st["targets"][cls]:
+                continue
+            t = surface_at(load_geometry(p), null.samples, st["backend"])
+            E = np.abs(Ds - t.D)[iu]
+            rms.append(float(np.sqrt(np.mean(E ** 2))) / h)
+            rel.append(float(np.median(E / np.maximum(Ds[iu], h))))
+        gt.append(f"| {cls} | {len(rms)} | {np.median(rms):.2f}, {max(rms):.2f} | {np.median(rel):.3f} |")
+    return "\n".join(spread) + "\n\n" + "\n".join(gt)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dataset", nargs="?")
     ap.add_argument("--from", dest="from_dir", default=None)
+    ap.add_argument("--dataset", dest="dataset_opt", default=None,
+                    help="with --from: the dataset, for the spread and ground-truth tables")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--classes", default=None)
-    ap.add_argument("--methods", default="fps,pls,hks,cnbs")
+    ap.add_argument("--methods", default="fps,pls,hks,cnbs,cnbs-scale")
+    ap.add_argument("--protocol", default="corresponding", choices=["corresponding", "independent", "both"])
     ap.add_argument("--out", default="evaluation")
-    ap.add_argument("--dense-check", default=None, metavar="DATASET_DIR",
-                    help="also compare the dense extension methods on cat0 -> cat1")
-    ap.add_argument("--spread", default=None, metavar="DATASET_DIR",
-                    help="also tabulate how clustered each method's landmarks are")
-    ap.add_argument("--dense-scores", default=None, metavar="DATASET_DIR",
-                    help="also score every landmark set with dense targets and correlate with the error")
     ap.add_argument("--note", default=None, help="a Markdown file appended to the section (analysis)")
     ap.add_argument("--no-write", action="store_true", help="print only; leave RESULTS.md alone")
     a = ap.parse_args()
-    wall = None
+    wall = peak = None
+    dataset = a.dataset or a.dataset_opt
     if a.from_dir:
         out = Path(a.from_dir)
     else:
@@ -276,20 +275,17 @@ def main() -> None:
         t0 = time.perf_counter()
         ev = evaluate_dataset(a.dataset, classes=a.classes.split(",") if a.classes else None,
                               methods=a.methods.split(","), n_jobs=a.jobs, quick=a.quick,
-                              progress=sys.stderr.isatty())
+                              progress=sys.stderr.isatty(), protocol=a.protocol)
         wall = time.perf_counter() - t0
+        peak = peak_rss_mb()
         out = Path(a.out)
         write_report(ev, out)
     data = json.loads((out / "results.json").read_text())
-    text = summarise(data, wall or sum(data["seconds"].values()))
+    text = summarise(data, wall, peak)
     if a.note:
         text += "\n\n" + Path(a.note).read_text().strip()
-    if a.spread:
-        text += "\n\n" + spread_table(data, Path(a.spread))
-    if a.dense_scores:
-        text += "\n\n" + dense_scores(data, Path(a.dense_scores), out)
-    if a.dense_check:
-        text += "\n\n" + dense_table(Path(a.dense_check))
+    if dataset:
+        text += "\n\n" + geometry_tables(data, Path(dataset))
     print(text)
     if not a.no_write:
         write_section("evaluate", text)

@@ -91,6 +91,24 @@ def one_blas_thread():
     return threadpool_limits(limits=1, user_api="blas")
 
 
+def single_blas_thread(f):
+    """Decorator: run ``f`` with BLAS limited to one thread (``one_blas_thread``).
+
+    Besides speed, this makes results independent of the thread count: a
+    threaded matrix product sums in another order, and the greedy choices of
+    CNBS follow near-ties of such sums (TOSCA wolf0, N = 400: the second CNBS
+    landmark was sample 171 with one BLAS thread and 304 with two).
+    """
+    import functools
+
+    @functools.wraps(f)
+    def wrapped(*args, **kwargs):
+        with one_blas_thread():
+            return f(*args, **kwargs)
+
+    return wrapped
+
+
 def die_with_parent(parent_pid: int) -> None:
     """Make this worker process end when its parent does (Linux ``PR_SET_PDEATHSIG``).
 

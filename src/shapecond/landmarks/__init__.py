@@ -22,6 +22,7 @@ import math
 import time
 
 from ..errors import InputError
+from ..limits import single_blas_thread
 from .result import LandmarkResult, make_result, sample_of_vertex
 
 METHODS = ("cnbs", "cnbs-scale", "cnbs-local", "fps", "pls", "hks", "user")
@@ -78,6 +79,7 @@ def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
     return verts, list(res.scores), float(res.initial)
 
 
+@single_blas_thread
 def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scores: bool | None = None,
                      effort: str = "default", fixed=(), score: str | None = None, epsilon=None,
                      **kw) -> LandmarkResult:

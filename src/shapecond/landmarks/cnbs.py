@@ -49,7 +49,10 @@ heat map is a lower bound per candidate, assembled in four steps:
    (benchmarks/RESULTS.md).
 
 Ties (all heat values inf on an exactly symmetric shape, for instance) are broken by
-the larger move, then the smaller index.  Everything is deterministic given ``seed``.
+the larger move, then the smaller index.  Everything is deterministic given ``seed``,
+whatever the number of BLAS threads: the entry points run with one
+(``limits.single_blas_thread``), since a threaded product sums in another order and
+the greedy follows near-ties of such sums.
 """
 
 from __future__ import annotations
@@ -61,6 +64,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..limits import single_blas_thread
 from ..symmetry.objective import ISOMETRY_RTOL
 from .warm import WarmPolisher, _search_module
 
@@ -182,6 +186,7 @@ def _maps_of(res, n_maps):
     return [np.asarray(m, dtype=np.int64) for m in maps[:n_maps]]
 
 
+@single_blas_thread
 def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: str = "default",
              n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
              resolve: str = "ils", n_kicks: int = N_KICKS, n_cross: int = 24, max_verify: int = 8,
@@ -314,6 +319,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     return HeatMap(values, sigma0, tuple(L), moved, resolved, pruned, results, time.perf_counter() - t0)
 
 
+@single_blas_thread
 def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = "default", budget=None):
     """Reference heat map: a full multistart search for every candidate (slow; tests, benchmarks)."""
     search = _search_module()
@@ -339,6 +345,7 @@ def _swap_witness(D, n, L, base, budget=None):
     return WarmPolisher(D, n, _maps_of(base, N_MAPS), L[:-1], budget)(L, L[-1], extra_starts=[t])
 
 
+@single_blas_thread
 def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
                    n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
                    resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False,
