@@ -57,13 +57,15 @@ def tables(data: dict):
     sig = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d["scores"].items()} for d in data["landmarks"]}
     dlt = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d.get("scale", {}).items()}
            for d in data["landmarks"]}
+    dlc = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d.get("scale_class", {}).items()}
+           for d in data["landmarks"]}
     acc = {}
     for r in data["records"]:
         key = (r.get("protocol", "independent"), r["cls"], r["method"], r["n_landmarks"], r["matcher"])
         for f in ("error", "exact", "recall", "objective_ratio", "seconds"):
             acc.setdefault(key, {}).setdefault(f, []).append(_num(r.get(f)))
     cells = {k: {f: _mean(v) for f, v in fs.items()} for k, fs in acc.items()}
-    return sig, dlt, cells
+    return sig, dlt, dlc, cells
 
 
 def _classes(st):
@@ -74,7 +76,7 @@ def summarise(data: dict, wall: float | None, peak: float | None = None) -> str:
     st = data["settings"]
     classes, methods, matchers = _classes(st), st["methods"], st["matchers"]
     prots = st.get("protocols", ["independent"])
-    sig, dlt, cells = tables(data)
+    sig, dlt, dlc, cells = tables(data)
     L = st["landmark_counts"]
     lines = ["## Figure 7 evaluation on TOSCA", "",
              f"Machine: {machine()}; load average at the end {os.getloadavg()[0]:.1f}. Command: "
@@ -89,7 +91,12 @@ def summarise(data: dict, wall: float | None, peak: float | None = None) -> str:
              "*corresponding*: the target is sampled at the null shape's sample vertices, the error of a "
              "sample is the geodesic distance from its image to its own vertex (the κ setting); "
              "*independent*: each target has its own FPS samples, the dense map is measured at them.", ""]
-    for name, tab in (("σ (Eq. 5, quick search)", sig), ("δ(ε) (scale-aware, quick search)", dlt)):
+    eps = st.get("class_epsilon") or {}
+    for name, tab in (("σ (Eq. 5, quick search)", sig), ("δ(ε), ε = the sample spacing (quick search)", dlt),
+                      ("δ(ε), ε = the class's deformation level: " + ", ".join(f"{c} {_f(eps[c])}" for c in
+                                                                               _classes(st) if c in eps), dlc)):
+        if not any(tab.values()):
+            continue
         lines += [f"### Score {name} after 1 / 3 / all landmarks (Figure 7a)", "",
                   "| class | L | " + " | ".join(methods) + " |", "|---|---|" + "---|" * len(methods)]
         for c in classes:
@@ -116,11 +123,12 @@ def summarise(data: dict, wall: float | None, peak: float | None = None) -> str:
                      for m in methods]
             lines.append("| **mean** | " + " | ".join(means) + (" | |" if paper else " |"))
             cor = data.get("correlation_by_protocol", {}).get(prot, data["correlation"]).get(mt, {})
-            sc = cor.get("scale", {})
+            sc, scc = cor.get("scale", {}), cor.get("scale_class", {})
             lines += ["", f"Spearman ρ(score, error), {mt}, {cor.get('n')} (class, method, count) cells: "
                       f"σ: {_f(cor.get('rho'))} (p = {_f(cor.get('p'))}), within classes "
-                      f"{_f(cor.get('within_class'))}; δ(ε): {_f(sc.get('rho'))} (p = {_f(sc.get('p'))}), "
-                      f"within classes {_f(sc.get('within_class'))}.", ""]
+                      f"{_f(cor.get('within_class'))}; δ(ε = spacing): {_f(sc.get('rho'))} (p = {_f(sc.get('p'))}), "
+                      f"within classes {_f(sc.get('within_class'))}; δ(ε = class): {_f(scc.get('rho'))} "
+                      f"(p = {_f(scc.get('p'))}), within classes {_f(scc.get('within_class'))}.", ""]
     lines += ["### Checks", ""] + checks(classes, methods, matchers, prots, sig, cells, L, data)
     return "\n".join(lines)
 
@@ -181,9 +189,11 @@ def checks(classes, methods, matchers, prots, sig, cells, L, data) -> list[str]:
                        f"{_f(avgL[bestL])} (x{_f(avgL[NEW] / avgL[bestL] if avgL[bestL] else math.nan)}; "
                        f"target <= 1.1).")
         for mt in matchers:
-            sc = data.get("correlation_by_protocol", {}).get(prot, data["correlation"]).get(mt, {}).get("scale", {})
-            out.append(f"- δ(ε) predicts the error ({mt}): ρ = {_f(sc.get('rho'))}, p = {_f(sc.get('p'))} "
-                       f"(target ρ >= 0.6, p < 0.01); mean within-class ρ {_f(sc.get('within_class'))}.")
+            cor = data.get("correlation_by_protocol", {}).get(prot, data["correlation"]).get(mt, {})
+            for key, name in (("scale", "ε = the sample spacing"), ("scale_class", "ε = the class's level")):
+                sc = cor.get(key, {})
+                out.append(f"- δ({name}) predicts the error ({mt}): ρ = {_f(sc.get('rho'))}, p = {_f(sc.get('p'))} "
+                           f"(target ρ >= 0.6, p < 0.01); mean within-class ρ {_f(sc.get('within_class'))}.")
     return out
 
 
@@ -201,7 +211,7 @@ def geometry_tables(data: dict, dataset: Path) -> str:
     sets = {(d["cls"], d["method"]): d["ids"] for d in data["landmarks"]}
     spread = ["### Landmark spread (all landmarks, null shape)", "",
               "Median over landmarks of the geodesic distance to the nearest other landmark, in covering "
-              "radii r of the N samples (r in diameters). `|` marks a first landmark within 2r of its mirror "
+              "radii r of the N samples (r in diameters). `†` marks a first landmark within 2r of its mirror "
               "image (on the mirror plane, where it leaves the mirror map feasible; classes with a `.sym` map).", "",
               "| class | L | r | " + " | ".join(methods) + " |", "|---|---|---|" + "---|" * len(methods)]
     gt = ["### The ground truth's own distortion (corresponding samples)", "",
@@ -230,7 +240,7 @@ def geometry_tables(data: dict, dataset: Path) -> str:
                 src = sample_surface(g, st["n_points"], st["backend"], st["seed"])
                 row = np.flatnonzero(src.samples == v)
                 d = (src.rows[row[0], sym[v]] / src.rows.max()) if row.size else math.nan
-                mark = " |" if d < 2 * r else ""
+                mark = " †" if d < 2 * r else ""
             cells.append(f"{np.median(S.min(axis=1)) / r:.1f}{mark}")
         spread.append(f"| {cls} | {len(sets[(cls, methods[0])])} | {_f(r)} | " + " | ".join(cells) + " |")
         null = sample_surface(g, st["n_points"], st["backend"], st["seed"])

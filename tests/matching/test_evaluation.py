@@ -69,6 +69,9 @@ def test_evaluation_of_an_isometric_class(dataset, tmp_path):
         assert (tmp_path / "out" / f"score_vs_error_{prot}.png").stat().st_size > 1000
     data = json.loads((tmp_path / "out" / "results.json").read_text())
     assert len(data["records"]) == 16 and set(data["correlation_by_protocol"]) == {"corresponding", "independent"}
+    # δ at the class's own deformation level, beside the default ε
+    assert set(ev.settings["class_epsilon"]) == {"strip"} and set(lm["scale_class"]) == {1, 3, 10}
+    assert "scale_class" in data["correlation"]["faq"]
 
 
 def test_class_with_different_vertex_counts_is_refused(dataset, tmp_path):

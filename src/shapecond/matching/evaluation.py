@@ -395,7 +395,8 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
 
     Phases: the null shapes' geodesics; then the targets' geodesics together
     with the landmark selections (they depend only on the null shapes); then
-    the matchings.
+    the matchings together with the δ scores at each class's own deformation
+    level (``class_epsilon``; corresponding protocol only).
     """
     if protocol not in PROTOCOLS + ("both",):
         raise InputError(f"unknown protocol {protocol!r} (corresponding, independent or both)")
@@ -433,7 +434,11 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
     landmarks = [d for d in run_tasks(tasks, n_jobs, scheduler, progress) if isinstance(d, dict)]
     timing["landmarks and targets"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    match_tasks = []
+    eps = {}
+    if "corresponding" in protocols:
+        eps = {cls: class_epsilon(null, targets, *common) for cls, (null, targets, _) in plan.items()}
+    match_tasks = [(scale_task, (d["cls"], plan[d["cls"]][0], d["method"], d["vertices"], sorted(d["scale"]),
+                                 eps[d["cls"]], *common), {}) for d in landmarks if d["cls"] in eps]
     for cls, (null, targets, k) in plan.items():
         sets = {d["method"]: d["vertices"] for d in landmarks if d["cls"] == cls}
         sets = {m: sets[m] for m in methods}
@@ -442,12 +447,51 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
             for prot in protocols:
                 match_tasks.append((target_task, (cls, null, tp, sets, counts, tuple(matchers), *common),
                                     dict(protocol=prot)))
-    records = [r for batch in run_tasks(match_tasks, n_jobs, scheduler, progress) for r in batch]
+    records, by_set = [], {(d["cls"], d["method"]): d for d in landmarks}
+    for res in run_tasks(match_tasks, n_jobs, scheduler, progress):
+        if isinstance(res, dict):  # a scale_task
+            by_set[(res["cls"], res["method"])]["scale_class"] = res["scale_class"]
+        else:
+            records += res
     timing["matching"] = time.perf_counter() - t0
     settings = dict(dataset=str(dataset_dir), classes=list(plan), methods=list(methods),
                     protocols=list(protocols),
                     matchers=list(matchers), n_points=n_points, seed=seed, backend=backend,
                     quick=quick, n_jobs=n_jobs, scheduler=None if scheduler is None else str(scheduler),
                     landmark_counts={c: v[2] for c, v in plan.items()},
-                    targets={c: [p.stem for p in v[1]] for c, v in plan.items()})
+                    targets={c: [p.stem for p in v[1]] for c, v in plan.items()}, class_epsilon=eps)
     return Evaluation(landmarks, records, settings, timing)
+
+
+def class_epsilon(null_path, targets, n_points, seed, backend, cache) -> float:
+    """A class's own deformation level: the median over its targets of the RMS distortion of
+    the ground-truth map between the null shape's samples and the same vertices of the target,
+    in units of the null shape's metric shape (diameter 1).  The ε at which δ(ε) predicts how
+    badly this class's poses will be matched; an evaluation knows it from the ground truth,
+    a user who knows their data's non-isometry passes it as ``--epsilon``."""
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
+
+    g = load_geometry(null_path)
+    null = sample_surface(g, n_points, backend, seed, cache=cache)
+    scale = metric_shape(g, n_points, backend=backend, seed=seed, cache=cache).scale
+    iu = np.triu_indices(null.n_samples, 1)
+    rms = [float(np.sqrt(np.mean((null.D - surface_at(load_geometry(p), null.samples, backend, cache).D)[iu] ** 2)))
+           for p in targets]
+    return float(np.median(rms)) * null.unit / scale
+
+
+def scale_task(cls, null_path, method, vertices, counts, epsilon, n_points, seed, backend, cache) -> dict:
+    """δ(ε) (quick search) of one landmark set after each count, at the distortion level ``epsilon``
+    (``class_epsilon``); non-increasing in the count (``landmarks.monotone``)."""
+    from shapecond.landmarks import monotone
+    from shapecond.shapes.io import load_geometry
+    from shapecond.shapes.metric import metric_shape
+    from shapecond.symmetry.scale import scale_score
+
+    shape = metric_shape(load_geometry(null_path), n_points, backend=backend, seed=seed, cache=cache)
+    where = {int(v): i for i, v in enumerate(shape.samples[:shape.n_samples])}
+    idx = [where[int(v)] for v in vertices]
+    vals = [scale_score(shape.D, shape.n_samples, idx[:c], epsilon, seed=seed, effort="quick").displacement
+            for c in counts]
+    return dict(cls=cls, method=method, scale_class=dict(zip(counts, monotone(vals))))

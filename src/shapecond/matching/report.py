@@ -126,6 +126,13 @@ def markdown(ev, plots=()) -> str:
                 "RMS displacement of the widest self-map whose distortion (and that of every landmark's "
                 "distance row) stays within ε = the median sample spacing; quick search, the same for "
                 "every method.", ""] + _score_rows(st, scale)
+    at_class = score_table(ev.landmarks, "scale_class")
+    if any(at_class.values()):
+        eps = st.get("class_epsilon", {})
+        out += ["", "## δ(ε) at each class's own deformation level", "",
+                "ε = the median RMS distortion of the class's ground-truth maps (corresponding samples): "
+                + ", ".join(f"{c} {_fmt(v)}" for c, v in eps.items()) + " (diameters).", ""]
+        out += _score_rows(st, at_class)
     for prot in protocols(ev):
         out += _error_sections(by_protocol(ev, prot), prot, scores)
     out += ["", "## Landmarks (null shape, file vertex ids)", ""]
@@ -176,7 +183,8 @@ def _error_sections(ev, protocol, scores) -> list[str]:
             low = min((v, m) for m, v in sc3.items() if v is not None)[1] if any(
                 v is not None for v in sc3.values()) else "-"
             out.append(f"| {cls} | " + " | ".join(cells) + f" | {best} | {low} |")
-        for key, name in (("scores", "σ"), ("scale", "δ(ε)")):
+        for key, name in (("scores", "σ"), ("scale", "δ(ε = sample spacing)"),
+                          ("scale_class", "δ(ε = the class's deformation level)")):
             rho, p, n = correlation(ev, matcher, key)
             rw, nw = within_class(ev, matcher, key)
             out += ["", f"Spearman rank correlation between the score {name} and error ({matcher}, {n} "
@@ -225,17 +233,23 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
             for r in ev.records:
                 if r.cls == cls and r.matcher == matcher:
                     by[(r.method, r.n_landmarks)].append(r.errors)
+            # the range where the curves differ: up to the 99th percentile of the class's errors
+            every = np.concatenate([e for errs in by.values() for e in errs]) if by else np.zeros(1)
+            top = max(1.0, float(np.quantile(every, 0.99)))
+            x = THRESHOLDS[THRESHOLDS <= top] if top >= 5.0 else np.linspace(0.0, top, 101)
+            low = 1.0
             for (m, c), errs in sorted(by.items()):
-                ax.plot(THRESHOLDS, cumulative_curve(np.concatenate(errs), THRESHOLDS),
-                        label=f"{m} {c}", linestyle="-" if c <= 3 else "--")
+                y = cumulative_curve(np.concatenate(errs), x)
+                low = min(low, float(y[0]))
+                ax.plot(x, y, label=f"{m} {c}", linestyle="-" if c <= 3 else "--")
             ax.set_title(cls)
             ax.set_xlabel("error, % of half diameter")
-            ax.set_ylim(0, 1)
+            ax.set_ylim(max(0.0, low - 0.05), 1.005)
             ax.legend(fontsize=6)
         for ax in axes.ravel()[len(classes):]:
             ax.axis("off")
-        fig.tight_layout()
-        fig.suptitle(f"{protocol} samples, {matcher}")
+        fig.suptitle(f"{protocol} samples, {matcher}: fraction of samples with error below x")
+        fig.tight_layout(rect=(0, 0, 1, 0.96))
         p = out_dir / f"error_curves_{protocol}_{matcher}.png"
         save_figure(fig, p, dpi=90, bbox_inches=None)
         paths.append(p)
@@ -264,13 +278,15 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
 
 
 def correlations(ev) -> dict:
-    """{matcher: {rho, p, n, within_class, scale: {...}}}: ``correlation`` and ``within_class``
-    of σ, and the same for the scale-aware score δ(ε) under ``scale``."""
+    """{matcher: {rho, p, n, within_class, scale: {...}, scale_class: {...}}}: ``correlation``
+    and ``within_class`` of σ, and the same for δ(ε) at the sample spacing (``scale``) and at
+    each class's own deformation level (``scale_class``)."""
     out = {}
     for m in ev.settings["matchers"]:
         out[m] = dict(zip(("rho", "p", "n"), correlation(ev, m)), within_class=within_class(ev, m)[0])
-        out[m]["scale"] = dict(zip(("rho", "p", "n"), correlation(ev, m, "scale")),
-                               within_class=within_class(ev, m, "scale")[0])
+        for key in ("scale", "scale_class"):
+            out[m][key] = dict(zip(("rho", "p", "n"), correlation(ev, m, key)),
+                               within_class=within_class(ev, m, key)[0])
     return out
 
 
