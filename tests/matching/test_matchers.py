@@ -145,3 +145,16 @@ def test_matchers_on_two_different_samplings():
         err = np.linalg.norm(a - b[m.t], axis=1)
         assert err.mean() < 2.5 * spacing, m.matcher
         assert np.median(err) < 1.5 * spacing, m.matcher
+
+
+def test_sparse_affinity_of_a_local_kernel_equals_the_dense_reference():
+    from shapecond.matching.refine import Kernel
+
+    _, Ds = _planar(30, 5)
+    Dt, truth = _permuted(Ds, 6)
+    cand = k_best_candidates(Ds, Dt, [0, 1], [truth[0], truth[1]], k=4)
+    kernel = Kernel(0.05, 0.0, 0.15)
+    M = affinity_matrix(Ds, Dt, cand, kernel)  # compiled: CSR, one pass
+    ref = affinity_matrix(Ds, Dt, cand, kernel, compiled=False)
+    assert M.nnz == np.count_nonzero(ref) > 0
+    assert np.allclose(M.toarray(), ref, rtol=1e-6, atol=0)

@@ -117,3 +117,30 @@ def test_correct_landmarks_do_not_cost_accuracy(matcher, seed):
         t = match(Ds, Dt, order[:c], truth[order[:c]]).t
         err[c] = float(np.mean(Ds[np.arange(100), np.argsort(truth)[t]]))
     assert err[10] <= err[3] * 1.05 + 1e-12, err
+
+
+@settings(max_examples=10, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(KERNELS))
+def test_compiled_gain_tables_equal_the_gain_entries(seed, kernel):
+    # every compiled form of Q sums the non-zero terms of the definition in its order
+    Ds, Dt, _ = _instance(12, seed, noise=0.05)
+    t = np.random.default_rng(seed).permutation(12)
+    p = kernel.params()
+    rows = np.arange(1, 12)
+    img = t[rows]
+    entries = np.array([[R._gain_entry(Ds, Dt, t, x, y, *p) for y in img] for x in rows])
+    band = R._gain_band(Ds, Dt, t, rows, np.ascontiguousarray(np.broadcast_to(img, (rows.size, img.size))), *p)
+    cols = R._gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, rows, *p)
+    assert np.array_equal(cols, band)
+    assert np.allclose(band, entries, rtol=1e-12, atol=1e-15)
+    near = R.support_lists(Ds, p[3])
+    assert np.array_equal([[R._gain_near(Ds, Dt, t, near, x, y, *p) for y in img] for x in rows], entries)
+
+
+def test_rank_table_finds_the_first_position_in_each_neighbour_list():
+    knn = np.array([[1, 2, 1], [0, 2, 3], [3, 0, 1], [2, 1, 0]])
+    rank = R.rank_table(knn)
+    for u in range(4):
+        for v in range(4):
+            hits = np.flatnonzero(knn[u] == v)
+            assert rank[u, v] == (hits[0] + 1 if hits.size else 0)

@@ -154,20 +154,48 @@ def _gain_band(Ds, Dt, t, rows, band, t0, r2, ir2, cut2):
 
 
 @numba.njit(cache=True)
-def _gain_of(Ds, Dt, t, B, Qb, x, y, t0, r2, ir2, cut2):
-    """Q[x, y] from the band of x when y is in it, else computed."""
-    for j in range(B.shape[1]):
-        if B[x, j] == y:
-            return Qb[x, j]
-    return _gain_entry(Ds, Dt, t, x, y, t0, r2, ir2, cut2)
+def _gain_near(Ds, Dt, t, near, x, y, t0, r2, ir2, cut2):
+    """Q[x, y] summed over ``near[x]``, the samples within the kernel's support of x in
+    increasing order (-1 padded): the terms of ``_gain_entry`` that are not zero, in its order,
+    so the same sum."""
+    s = 0.0
+    for q in range(near.shape[1]):
+        xp = near[x, q]
+        if xp < 0:
+            break
+        s += _k(Ds[x, xp], Dt[y, t[xp]], t0, r2, ir2, cut2)
+    return s
+
+
+def support_lists(D_source, cut2: float) -> np.ndarray:
+    """(N, w) for each source sample the other samples within the kernel's support
+    (``D² < cut2``), increasing, padded with -1."""
+    D = np.asarray(D_source)
+    within = (D * D < cut2) & ~np.eye(D.shape[0], dtype=bool)
+    near = np.full((D.shape[0], max(int(within.sum(axis=1).max(initial=0)), 1)), -1, dtype=np.int64)
+    for x, row in enumerate(within):
+        idx = np.flatnonzero(row)
+        near[x, :idx.size] = idx
+    return near
+
+
+def rank_table(knn: np.ndarray) -> np.ndarray:
+    """(M, M) int16: ``rank[u, v] = j + 1`` for the first ``j`` with ``knn[u, j] = v``, else 0."""
+    m, k = knn.shape
+    rank = np.zeros((m, m), dtype=np.int16)
+    for j in range(k - 1, -1, -1):  # the first occurrence written last
+        rank[np.arange(m), knn[:, j]] = j + 1
+    return rank
 
 
 @numba.njit(cache=True)
-def _swap_search(Ds, Dt, t, knn, isfree, t0, r2, ir2, cut2, max_moves):
+def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_moves):
     """Best-improvement swaps of neighbouring images; ``t`` updated in place.
 
     The band of x is its image and the ``k`` nearest target samples of it:
-    ``B[x] = (T x, knn[T x])`` with gains ``Qb[x, j] = Q[x, B[x, j]]``.
+    ``B[x] = (T x, knn[T x])`` with gains ``Qb[x, j] = Q[x, B[x, j]]``.  The gain
+    of b at T a is read from b's band at ``rank[T b, T a]`` (``rank_table``), or
+    summed over ``near[b]`` (``support_lists``) when T a is not in it.
     """
     n = Ds.shape[0]
     m = Dt.shape[0]
@@ -196,7 +224,9 @@ def _swap_search(Ds, Dt, t, knn, isfree, t0, r2, ir2, cut2, max_moves):
                 tb = t[b]
                 dab = Ds[a, b]
                 # ΔF / 2 of exchanging T a and T b (module docstring)
-                gain = (Qb[a, j] - Qb[a, 0] + _gain_of(Ds, Dt, t, B, Qb, b, ta, t0, r2, ir2, cut2) - Qb[b, 0]
+                rb = rank[tb, ta]
+                qba = Qb[b, rb] if rb > 0 else _gain_near(Ds, Dt, t, near, b, ta, t0, r2, ir2, cut2)
+                gain = (Qb[a, j] - Qb[a, 0] + qba - Qb[b, 0]
                         - 2.0 * _k(dab, 0.0, t0, r2, ir2, cut2)
                         + 2.0 * _k(dab, Dt[ta, tb], t0, r2, ir2, cut2))
                 if gain > best:
@@ -254,10 +284,38 @@ def neighbours(D_target, k: int) -> np.ndarray:
     return np.ascontiguousarray(order[:, 1:k + 1])
 
 
+@numba.njit(cache=True, parallel=True)
+def _gain_columns(Ds, Dc, t, rows, t0, r2, ir2, cut2):
+    """Q[rows[i], y_j] for every target ``y_j`` of ``Dc[u, j] = D_t[y_j, u]`` (module docstring).
+
+    The terms of each entry are those of ``_gain_row``, added in the same order; the
+    loop runs over the pairs within the support of a row and, inside, over the
+    targets (a contiguous row of ``Dc``), so that it vectorises.
+    """
+    n = Ds.shape[0]
+    nc = Dc.shape[1]
+    Q = np.zeros((rows.size, nc))
+    for i in numba.prange(rows.size):
+        x = rows[i]
+        acc = Q[i]
+        for xp in range(n):
+            d = Ds[x, xp]
+            if xp != x and d * d < cut2:
+                cv = 1.0 / (SUPPORT * SUPPORT * (t0 + r2 * d * d))
+                w = 1.0 - d * d * ir2
+                wv = w * w
+                row = Dc[t[xp]]
+                for j in range(nc):
+                    diff = d - row[j]
+                    u = max(1.0 - diff * diff * cv, 0.0)
+                    acc[j] += u * u * wv
+    return Q
+
+
 def _reassign(Ds, Dt, t, free, p):
     """Linear assignment of the free samples to their current images maximising Σ Q[x, T' x]."""
     img = t[free]
-    Q = _gain_band(Ds, Dt, t, free, np.ascontiguousarray(np.broadcast_to(img, (free.size, img.size))), *p)
+    Q = _gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, free, *p)
     r, c = linear_sum_assignment(Q, maximize=True)
     out = t.copy()
     out[free[r]] = img[c]
@@ -290,9 +348,10 @@ def polish(D_source, D_target, t, free, kernel: Kernel, knn=None, k: int = 16,
     isfree = np.zeros(Ds.shape[0], dtype=np.bool_)
     isfree[free] = True
     knn = neighbours(Dt, k) if knn is None else np.ascontiguousarray(knn[:, :k], dtype=np.int64)
+    rank, near = rank_table(knn), support_lists(Ds, p[3])
     f = _objective(Ds, Dt, t, *p)
     for _ in range(max_rounds):
-        _swap_search(Ds, Dt, t, knn, isfree, *p, 50 * Ds.shape[0])
+        _swap_search(Ds, Dt, t, knn, rank, near, isfree, *p, 50 * Ds.shape[0])
         f = _objective(Ds, Dt, t, *p)
         t2 = _reassign(Ds, Dt, t, free, p)
         f2 = _objective(Ds, Dt, t2, *p)

@@ -119,48 +119,60 @@ def _affinity_kernel(Ds, Dt, src, tgt, t0, r2, iw2, cut2):
     return M
 
 
-@numba.njit(cache=True)
-def _sparse_affinity_row(Ds, Dt, src, tgt, order, starts, near, i, t0, r2, iw2, cut2, cols, vals):
-    """Nonzeros of row ``i`` of M into ``cols``/``vals``; returns their count."""
-    x, y = src[i], tgt[i]
-    k = 0
-    for x2 in near[x]:
-        if x2 < 0:
-            break
-        d = Ds[x, x2]
-        for q in range(starts[x2], starts[x2 + 1]):
-            j = order[q]
-            y2 = tgt[j]
-            if y2 != y:
-                v = R._k(d, Dt[y, y2], t0, r2, iw2, cut2)
-                if v > 0.0:
-                    cols[k] = j
-                    vals[k] = v
-                    k += 1
-    return k
-
-
 @numba.njit(cache=True, parallel=True)
 def _sparse_affinity_kernel(Ds, Dt, src, tgt, order, starts, near, t0, r2, iw2, cut2):
-    """CSR pattern and values of M for a kernel of finite support (two passes, rows in parallel).
+    """CSR pattern and values of M for a kernel of finite support, in one pass.
 
     ``order[starts[x]:starts[x + 1]]`` lists the candidates of source sample ``x``;
     ``near[x]`` the other source samples within the kernel's support (-1 padded).
+    Row ``i`` (candidate ``x -> y``) holds, for each ``x2`` of ``near[x]`` in turn and
+    each candidate ``j`` of ``x2`` with another target, ``K(D_s[x, x2], D_t[y, tgt[j]])``
+    when positive.  Rows are written (branch-free) into slots of their upper bound
+    (the candidates of the neighbours), sources in parallel, then packed.
     """
     C = src.size
-    width = near.shape[1] * (np.max(starts[1:] - starts[:-1]) if starts.size > 1 else 0)
-    counts = np.zeros(C + 1, dtype=np.int64)
-    for i in numba.prange(C):
-        cols = np.empty(width, dtype=np.int32)
-        vals = np.empty(width, dtype=np.float32)
-        counts[i + 1] = _sparse_affinity_row(Ds, Dt, src, tgt, order, starts, near, i, t0, r2, iw2,
-                                             cut2, cols, vals)
-    indptr = np.cumsum(counts)
+    cnt = starts[1:] - starts[:-1]
+    off = np.zeros(C + 1, dtype=np.int64)
+    for i in range(C):
+        s = 0
+        for q in range(near.shape[1]):
+            x2 = near[src[i], q]
+            if x2 < 0:
+                break
+            s += cnt[x2]
+        off[i + 1] = off[i] + s
+    cols = np.empty(off[-1], dtype=np.int32)
+    vals = np.empty(off[-1], dtype=np.float32)
+    nnz = np.zeros(C, dtype=np.int64)
+    for x in numba.prange(starts.size - 1):
+        for qq in range(starts[x], starts[x + 1]):
+            i = order[qq]
+            y = tgt[i]
+            p = off[i]
+            for q in range(near.shape[1]):
+                x2 = near[x, q]
+                if x2 < 0:
+                    break
+                d = Ds[x, x2]
+                for r in range(starts[x2], starts[x2 + 1]):
+                    j = order[r]
+                    y2 = tgt[j]
+                    if y2 != y:
+                        v = R._k(d, Dt[y, y2], t0, r2, iw2, cut2)
+                        cols[p] = j
+                        vals[p] = v
+                        p += 1 if v > 0.0 else 0
+            nnz[i] = p - off[i]
+    indptr = np.zeros(C + 1, dtype=np.int64)
+    for i in range(C):
+        indptr[i + 1] = indptr[i] + nnz[i]
     indices = np.empty(indptr[-1], dtype=np.int32)
     data = np.empty(indptr[-1], dtype=np.float32)
     for i in numba.prange(C):
-        _sparse_affinity_row(Ds, Dt, src, tgt, order, starts, near, i, t0, r2, iw2, cut2,
-                             indices[indptr[i]:indptr[i + 1]], data[indptr[i]:indptr[i + 1]])
+        a, b = off[i], indptr[i]
+        for q in range(nnz[i]):
+            indices[b + q] = cols[a + q]
+            data[b + q] = vals[a + q]
     return indptr, indices, data
 
 
@@ -184,11 +196,7 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
         order = np.argsort(src, kind="stable")
         starts = np.searchsorted(src[order], np.arange(Ds.shape[0] + 1))
         t0, r2, iw2, cut2 = kernel.params()
-        within = (Ds * Ds < cut2) & ~np.eye(Ds.shape[0], dtype=bool)
-        near = np.full((Ds.shape[0], max(int(within.sum(axis=1).max()), 1)), -1, dtype=np.int64)
-        for x, row in enumerate(within):
-            idx = np.flatnonzero(row)
-            near[x, :idx.size] = idx
+        near = R.support_lists(Ds, cut2)
         indptr, indices, data = _sparse_affinity_kernel(
             Ds, np.ascontiguousarray(D_target, dtype=np.float64), src, tgt, order, starts, near,
             t0, r2, iw2, cut2)
