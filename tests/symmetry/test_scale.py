@@ -9,10 +9,10 @@ from hypothesis import given, settings, strategies as st
 from scipy.spatial.distance import cdist
 
 from shapecond.landmarks import monotone, select_landmarks
-from shapecond.landmarks.cnbs import full_heat_map, heat_map
+from shapecond.landmarks.cnbs import HeatMap, full_heat_map, heat_map
 from shapecond.shapes.metric import from_distance_matrix
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.scale import budget_of, default_epsilon, scale_score
+from shapecond.symmetry.scale import budget_of, default_epsilon, resolution, scale_score
 
 
 def _points(n, seed):
@@ -98,7 +98,22 @@ def test_heat_map_with_a_budget_bounds_the_full_searches():
     for p in free:
         exact = exact_delta(D, 2 * default_epsilon(D), [0, p]) * math.sqrt(8)
         assert hm.values[p] <= exact + 1e-9 and full[p] <= exact + 1e-9
-    assert hm.values[hm.argmin()] == pytest.approx(np.nanmin(full), abs=1e-9)
+    # the choice is within the resolution of δ of the best full search, and the farthest
+    # from the landmark among the heat map's candidates that close to its smallest value
+    c = hm.argmin()
+    assert hm.tie == pytest.approx(math.sqrt(8) * resolution(D, 8)) and hm.tie > 0
+    assert hm.values[c] <= np.nanmin(full) + hm.tie + 1e-9
+    tied = free[hm.values[free] <= np.nanmin(hm.values) + hm.tie]
+    assert D[c, 0] == D[tied, 0].max()
+
+
+def test_near_ties_of_the_scale_heat_map_go_to_the_farthest_candidate():
+    values = np.array([np.nan, 1.00, 1.04, 1.20, 1.02])
+    spread = np.array([0.0, 0.1, 0.5, 0.9, 0.3])
+    hm = HeatMap(values, 2.0, (0,), np.zeros(5), np.zeros(5, bool), tie=0.05, spread=spread)
+    assert hm.argmin() == 2  # 3 is farther but not within the tie; 1 is smallest but nearest
+    exact = HeatMap(values, 2.0, (0,), np.zeros(5), np.zeros(5, bool))
+    assert exact.argmin() == 1  # the paper's σ: no tolerance
 
 
 def test_cnbs_scale_landmarks_have_non_increasing_scores():

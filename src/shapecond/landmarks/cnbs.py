@@ -49,7 +49,15 @@ heat map is a lower bound per candidate, assembled in four steps:
    (benchmarks/RESULTS.md).
 
 Ties (all heat values inf on an exactly symmetric shape, for instance) are broken by
-the larger move, then the smaller index.  Everything is deterministic given ``seed``,
+the larger move, then the smaller index.  On the scale-aware score (``budget``) values
+within the resolution of δ (``scale.resolution``, half a sample spacing) of the smallest
+are ties too, broken first by the larger distance to the landmarks so far: the
+farthest-point rule among candidates the sampling cannot rank.  Without it the greedy
+follows differences of a fraction of a sample spacing and stacks landmarks at one tip
+once δ has reached its plateau (benchmarks, landmark spread).  The argmin m is found
+as above; then the candidates are walked from the farthest, each searched only until
+its value passes m + tolerance, and the first that stays below (after verification)
+is the choice.  Everything is deterministic given ``seed``,
 whatever the number of BLAS threads: the entry points run with one
 (``limits.single_blas_thread``), since a threaded product sums in another order and
 the greedy follows near-ties of such sums.
@@ -154,8 +162,8 @@ class HeatMap:
 
     ``values[p]`` is nan for p in ``landmarks`` (not a candidate); ``results[p]`` is
     the search result whose witness attains the warm/full part of ``values[p]``;
-    ``pruned[p]`` is True where the search stopped early above the argmin's value
-    (``heat_map(prune=True)``; all False without pruning).
+    ``pruned[p]`` is True where the search stopped early once p could no longer be
+    the argmin (``heat_map(prune=True)``; all False without pruning).
     """
 
     values: np.ndarray
@@ -166,6 +174,8 @@ class HeatMap:
     pruned: np.ndarray | None = None
     results: dict = field(repr=False, default_factory=dict)
     seconds: float = 0.0
+    tie: float = 0.0
+    spread: np.ndarray | None = None
 
     def improvement(self) -> np.ndarray:
         """σ before minus σ with p fixed (0 where the witness fixes p)."""
@@ -174,8 +184,15 @@ class HeatMap:
                             self.sigma_before - self.values)
 
     def argmin(self) -> int:
+        """The next landmark: the smallest value; ties (within ``tie``) go to the larger
+        ``spread`` (distance to the landmarks), then the larger move, then the smaller index."""
         cand = np.flatnonzero(~np.isnan(self.values))
-        order = np.lexsort((cand, -self.moved[cand], self.values[cand]))
+        v = self.values[cand]
+        if self.tie > 0 and self.spread is not None and np.isfinite(v.min()):
+            near = cand[v <= v.min() + self.tie]
+            order = np.lexsort((near, -self.moved[near], -self.spread[near]))
+            return int(near[order[0]])
+        order = np.lexsort((cand, -self.moved[cand], v))
         return int(cand[order[0]])
 
 
@@ -209,7 +226,8 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     progress : callable(done, total) or None.
     budget : None for σ (Eq. 5); a Dist² budget for the scale-aware score
         (``shapecond.symmetry.scale``): values are then sqrt(d²) of the widest map
-        within the budget fixing each candidate (δ(ε) = value / sqrt(N)).
+        within the budget fixing each candidate (δ(ε) = value / sqrt(N)), and values
+        within sqrt(N)·``scale.resolution`` of the smallest tie (module docstring).
     """
     t0 = time.perf_counter()
     search = _search_module()
@@ -246,6 +264,12 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     pruned = np.zeros(n, dtype=bool)
     values[cand] = floor[cand]
     rng = np.random.default_rng(seed)
+    tie, spread = 0.0, None
+    if budget is not None and L:
+        from ..symmetry.scale import resolution
+
+        tie = math.sqrt(n) * resolution(D, n)
+        spread = D[:n, L].min(axis=1)
 
     def take(p, r):
         if r is not None and (float(r.sigma) > values[p] or p not in results):
@@ -293,17 +317,13 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     donors = sorted((p for p in results if p not in L), key=lambda p: -values[p])[:n_cross]
     donor_maps = [results[p].witness for p in donors]
     rounds = 0
-    while True:
-        c = HeatMap(values, sigma0, tuple(L), moved, resolved).argmin()
-        if pruned[c]:  # the returned argmin is never a pruned candidate
-            pruned[c] = evaluate(c, math.inf)
-            continue
-        if verified[c] or rounds >= max_verify:
-            break
+
+    def verify(c):
+        nonlocal rounds
         verified[c] = True
         rounds += 1
         if moved[c] == 0.0:
-            break  # fixed by the witness: its value sigma0 is attained and maximal
+            return  # fixed by the witness: its value sigma0 is attained and maximal
         starts = [repair_fixing(t, c) for t in donor_maps]
         r = polish(L + [c], c, extra_starts=starts)
         if resolve == "full" or n <= FULL_VERIFY_N:
@@ -314,9 +334,37 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
         if r is not None and float(r.sigma) > values[c]:
             values[c] = float(r.sigma)
             results[c] = r
+
+    while True:
+        c = HeatMap(values, sigma0, tuple(L), moved, resolved).argmin()
+        if pruned[c]:  # the returned argmin is never a pruned candidate
+            pruned[c] = evaluate(c, math.inf)
+            continue
+        if verified[c] or rounds >= max_verify or moved[c] == 0.0:
+            break
+        verify(c)
+    # 6'. near-ties of δ (module docstring): walk the candidates from the farthest from the
+    # landmarks; the first whose value, searched until it leaves the tie (and verified),
+    # stays within ``tie`` of the argmin's value m wins.  Values only grow, so m stays the
+    # smallest and ``HeatMap.argmin`` returns the same candidate.
+    if tie > 0:
+        window = values[c] + tie
+        for p in cand[np.lexsort((cand, -moved[cand], -spread[cand]))]:
+            p = int(p)
+            if p == c:
+                break
+            if values[p] > window:
+                continue  # already a lower bound above the tie
+            if pruned[p]:
+                pruned[p] = evaluate(p, window if prune else math.inf)
+            if not pruned[p] and values[p] <= window and not verified[p] and rounds < max_verify:
+                verify(p)
+            if not pruned[p] and values[p] <= window:
+                break
     # values are not clipped at sigma0: a value above it means the search with p fixed
     # found a better witness than the base search did (then sigma0 was weak).
-    return HeatMap(values, sigma0, tuple(L), moved, resolved, pruned, results, time.perf_counter() - t0)
+    return HeatMap(values, sigma0, tuple(L), moved, resolved, pruned, results, time.perf_counter() - t0,
+                   tie, spread)
 
 
 @single_blas_thread

@@ -66,6 +66,18 @@ def default_epsilon(D, n_samples=None) -> float:
     return float(np.median(X.min(axis=1)))
 
 
+def resolution(D, n_samples=None) -> float:
+    """Half the median sample spacing, h / 2 (units of D): how finely δ is resolved.
+
+    A self-map of the continuous shape is seen on the samples through the nearest
+    sample of each image, which moves every point by up to about h / 2; two maps
+    whose RMS displacements differ by less than that are not told apart by the
+    sampling.  CNBS on δ treats heat-map values this close to the smallest as a tie
+    and breaks it by the distance to the landmarks so far (``cnbs.HeatMap.argmin``).
+    """
+    return 0.5 * default_epsilon(D, n_samples)
+
+
 def budget_of(epsilon: float, n: int, D=None) -> float:
     """Dist² budget of an RMS distortion ε over N samples: (εN)².
 
