@@ -57,7 +57,11 @@ follows differences of a fraction of a sample spacing and stacks landmarks at on
 once δ has reached its plateau (benchmarks, landmark spread).  The argmin m is found
 as above; then the candidates are walked from the farthest, each searched only until
 its value passes m + tolerance, and the first that stays below (after verification)
-is the choice.  Everything is deterministic given ``seed``,
+is the choice.  And each next heat map of δ starts from a fresh ``witness_search`` with
+the new landmark (warm-started from the chosen candidate's maps), not from those maps
+alone: warm starts repaired from maps of fewer landmarks miss the widest map within the
+budget (on TOSCA wolf, heat values of 0.06 where a fresh search finds δ = 0.137), and the
+heat map can only rank candidates against a base that has it.  Everything is deterministic given ``seed``,
 whatever the number of BLAS threads: the entry points run with one
 (``limits.single_blas_thread``), since a threaded product sums in another order and
 the greedy follows near-ties of such sums.
@@ -432,6 +436,12 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
         if base is None or float(base.sigma) < hm.values[c]:
             # the single-swap floor won: continue from a witness that attains it
             base = _swap_witness(D, n, L + [c], base or prev, budget)
+        if budget is not None:
+            # δ: a fresh search with the new landmark, warm-started from the heat map's maps
+            # (module docstring, on ties): the next heat map starts from it
+            fresh = search.witness_search(D, n_samples=n, landmarks=L + [c], seed=seed, effort=effort,
+                                          starts=_maps_of(base, n_maps), budget=budget)
+            base = fresh if float(fresh.sigma) > float(base.sigma) else base
         L.append(c)
         if keep_heat_maps:
             maps.append(hm)

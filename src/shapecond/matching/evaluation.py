@@ -62,7 +62,7 @@ DEFAULT_LANDMARKS = 10
 #: Which samples a target has (module docstring).
 PROTOCOLS = ("corresponding", "independent")
 #: bump when the landmark methods change, to invalidate cached selections
-LANDMARK_CACHE_VERSION = "6"  # 6: cnbs-scale near-ties to the farthest; 5: δ(ε) scores, cnbs-scale
+LANDMARK_CACHE_VERSION = "6"  # 6: cnbs-scale near-ties to the farthest, fresh base per step; 5: δ(ε) scores, cnbs-scale
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 
 
