@@ -278,6 +278,9 @@ def main() -> None:
     dataset = a.dataset or a.dataset_opt
     if a.from_dir:
         out = Path(a.from_dir)
+        timing = out / "bench_timing.json"  # the timed run's wall time and peak memory
+        if timing.exists():
+            wall, peak = json.loads(timing.read_text()).values()
     else:
         from shapecond.matching.evaluation import evaluate_dataset
         from shapecond.matching.report import write_report
@@ -290,6 +293,7 @@ def main() -> None:
         peak = peak_rss_mb()
         out = Path(a.out)
         write_report(ev, out)
+        (out / "bench_timing.json").write_text(json.dumps({"wall": wall, "peak": peak}))
     data = json.loads((out / "results.json").read_text())
     text = summarise(data, wall, peak)
     if a.note:
