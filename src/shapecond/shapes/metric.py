@@ -158,7 +158,7 @@ def _check_entry(a: dict, geometry: Geometry, landmarks) -> None:
         raise InputError("its distances are not scaled to diameter 1")
     if a["nearest"].size and (a["nearest"].min() < 0 or a["nearest"].max() >= samples.size):
         raise InputError("its nearest-point map is out of range")
-    check_distance_matrix(a["D"])
+    a["D"] = check_distance_matrix(a["D"])  # the checked copy: validated once per read, not twice
 
 
 def from_distance_matrix(D: np.ndarray, landmarks=(), name: str = "matrix") -> MetricShape:

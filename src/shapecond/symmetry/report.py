@@ -13,13 +13,14 @@ Landmarks and the witnesses are given in the input's own ids.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from shapecond.jsonable import jsonable
-from shapecond.symmetry.resolution import ResolutionReport, resolution_for_shape
-from shapecond.symmetry.scale import ScaleScore, scale_score
+from shapecond.symmetry.resolution import ResolutionReport, coarse_level, refine, resolution_for_shape
+from shapecond.symmetry.scale import ScaleScore, budget_of, describe, scale_score
 from shapecond.symmetry.score import SymmetryScore, symmetry_score
 from shapecond.symmetry.verdict import verdict
 
@@ -92,6 +93,21 @@ class ScoreResult:
                                   fig=fig, **kw)
 
 
+def _scale(D, n, lm, epsilon, seed, effort, sc) -> ScaleScore:
+    """δ(ε) started from the σ search's maps; with dense targets searched over the first M/2
+    targets and refined over all M, as σ is (``resolution.coarse_to_fine``)."""
+    starts = [sc.witness, *sc.maps]
+    if sc.coarse is None:
+        return scale_score(D, n, lm, epsilon, seed=seed, effort=effort, starts=starts)
+    t0 = time.perf_counter()
+    m_lo = coarse_level(D.shape[0], n)
+    lo_starts = [sc.coarse.witness, *sc.coarse.maps] + [t for t in starts if t.max() < m_lo]
+    lo = scale_score(D[:m_lo, :m_lo], n, lm, epsilon, seed=seed, effort=effort, starts=lo_starts)
+    # ε and its budget depend on the samples only: the same at both levels
+    fine = refine(D, n, lm, [lo.witness, *lo.maps, *starts], budget=budget_of(lo.epsilon, n, D))
+    return describe(D, n, fine.witness, lo.epsilon, lm, time.perf_counter() - t0, fine.maps)
+
+
 def score_shape(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
                 effort="default", force=False, epsilon=None, search=None) -> ScoreResult:
     """Score a ``MetricShape`` whose samples include the landmarks ``landmark_ids`` (input ids).
@@ -103,7 +119,6 @@ def score_shape(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10
     sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
                         seed=seed, effort=effort, force=force, search=search)
     res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
-    delta = scale_score(shape.D, shape.n_points, lm, epsilon, seed=seed, effort=effort,
-                        starts=[sc.witness, *sc.maps])
+    delta = _scale(shape.D, shape.n_points, lm, epsilon, seed, effort, sc)
     return ScoreResult(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta),
                        tuple(int(v) for v in landmark_ids), delta)

@@ -28,20 +28,33 @@ target counts M_lo < M_hi (M_hi = 2 M_lo) and classifies:
 Measured on TOSCA (benchmarks/RESULTS.md, section bench_search): the mirror
 witnesses of the exactly symmetric null shapes have RMS distortion about
 0.3-0.6 r, deformed poses several r.
+
+The two levels are also how a large dense σ is searched (``coarse_to_fine``):
+the full witness search over Y_lo, then each of its maps polished once over Y.
+A local-search move costs O(N·M), and a map found over Y_lo is already most of
+the way to its optimum over Y, so this costs a fraction of a full search over
+Y, and the report then judges the score's own two levels with no search of
+its own.
 """
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from shapecond.jsonable import jsonable
+from shapecond.limits import one_blas_thread, search_seconds
+from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.search import witness_search
+from shapecond.symmetry.search import (DENSE_K, KEEP, MapPool, SearchResult, SearchStage, _prepare,
+                                      best_reassignment, witness_search)
 
 CONVERGED_RTOL = 0.10
+#: ``two_levels``: dense searches estimated to take at least this long run in two levels.
+TWO_LEVEL_SECONDS = 2.0
 RESOLUTION_FACTOR = 1.0
 DISPLACEMENT_FACTOR = 3.0
 
@@ -82,6 +95,75 @@ def classify(sigma_lo: float, sigma_hi: float, distortion_rms: float, covering_r
     return "undecided"
 
 
+def coarse_level(m: int, n: int) -> int:
+    """M_lo, the target count of the lower level: the first half of the M targets, at least the N samples."""
+    return max(n, m // 2)
+
+
+def two_levels(n: int, m: int) -> bool:
+    """Whether σ over M dense targets is searched by ``coarse_to_fine`` rather than by one full search.
+
+    Only where the full search is slow (estimated at least ``TWO_LEVEL_SECONDS``,
+    ``limits.search_seconds``) and the lower level is itself dense: below that the
+    full search is affordable and explores more starts over Y (on small random
+    instances, N = 4-20 and M = 8N, it finds a higher σ about half the time).
+    """
+    return coarse_level(m, n) > n and search_seconds(n, m) >= TWO_LEVEL_SECONDS
+
+
+def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
+    """Polish each of ``maps`` over all M targets of ``D`` (the witness search's dense local search).
+
+    A map over the first M_lo targets is a map over all M (FPS prefix), so the
+    maps a search found over Y_lo, each polished once over Y, are the maps of a
+    search over Y that starts where Y_lo left off.  ``budget``: the scale-aware
+    objective (``witness_search(budget=...)``).  Returns the ``KEEP`` best
+    distinct maps, the given ones included, as a ``SearchResult``.
+    """
+    t0 = time.perf_counter()
+    D, n, lm, free = _prepare(D, n_samples, landmarks)
+    stage = SearchStage(D, n, free, DENSE_K)
+    pool = MapPool(D, n, budget, lm)
+    mode, s = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
+    with one_blas_thread():
+        for t in maps:
+            t = np.asarray(t, dtype=np.int64)
+            if t.tobytes() in pool.items:  # polished already (the witness is also the first map)
+                continue
+            pool.add(t)
+            if pool.best_value() < math.inf:
+                pool.add(stage.polish(t, mode=mode, s=s, anchors=lm))
+    tops = [it for it in pool.top(KEEP) if it[0] > 0.0]
+    if not tops:  # no moving map (within the budget): the identity, as ``witness_search`` reports it
+        ident = np.arange(n, dtype=np.int64)
+        return SearchResult(0.0, ident, 0.0, 0.0, (ident,), (0.0,), time.perf_counter() - t0)
+    sig = [math.inf if v == math.inf else math.sqrt(max(v, 0.0)) for v, *_ in tops]
+    _, t, num, den = tops[0]
+    return SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den, maps=tuple(it[1] for it in tops),
+                        sigmas=tuple(sig), seconds=time.perf_counter() - t0)
+
+
+def coarse_to_fine(D, n_samples, landmarks=(), seed=0, effort="default", starts=(),
+                   budget=None) -> tuple[SearchResult, SearchResult]:
+    """The witness search over the first M_lo targets, then its maps refined over all M.
+
+    Returns ``(fine, coarse)``: the search over Y and the one over Y_lo, the two
+    levels the report compares.  Cheaper than a search at each level: the local
+    search's moves cost O(N·M) each, and at M_lo most of them are already made.
+    On the TOSCA null shapes (N = 400, M = 3,200) σ is as high as a full search
+    over Y (benchmarks/RESULTS.md, section "score-warm").
+    """
+    D, n, lm, free = _prepare(D, n_samples, landmarks)
+    m_lo = coarse_level(D.shape[0], n)
+    lo_starts = [t for t in starts if np.max(t) < m_lo]
+    coarse = witness_search(D[:m_lo, :m_lo], n, lm, seed=seed, effort=effort, starts=lo_starts, budget=budget)
+    # the one start of the full search that the coarse maps cannot reach: one sample sent to
+    # a target of the second half right beside it (a thin tip's sample, the witness of horse0)
+    one_point = [best_reassignment(D, n, free)] if free.size else []
+    fine = refine(D, n, lm, [coarse.witness, *coarse.maps, *starts, *one_point], budget=budget)
+    return fine, coarse
+
+
 def _best_global(D, n, maps, covering_radius):
     """The highest-scoring map among ``maps`` that moves the samples by >= DISPLACEMENT_FACTOR r (RMS).
 
@@ -97,7 +179,7 @@ def _best_global(D, n, maps, covering_radius):
 
 
 def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landmarks=(), seed=0,
-                      effort="default", score_hi=None) -> ResolutionReport:
+                      effort="default", score_hi=None, score_lo=None) -> ResolutionReport:
     """Compare the dense score over the first M/2 targets with the one over all M.
 
     The question is whether the *surface* has a symmetry, so the report judges
@@ -115,16 +197,24 @@ def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landm
     covering_radius : covering radius of the full Y (units of D_hi).
     score_hi : an already computed ``SearchResult`` (or ``SymmetryScore``) for D_hi,
         whose witness and maps are reused (its maps also warm-start the M/2 search).
+    score_lo : an already computed search over the first M/2 targets (the coarse
+        level of ``coarse_to_fine``, or ``SymmetryScore.coarse``), reused as is.
+    Without either, both levels come from one ``coarse_to_fine`` search.
     """
     m = D_hi.shape[0]
-    m_lo = max(n_samples, m // 2)
-    if score_hi is None:
+    m_lo = coarse_level(m, n_samples)
+    if score_lo is None:
+        score_lo = getattr(score_hi, "coarse", None)
+    if score_hi is None and score_lo is None and two_levels(n_samples, m):
+        score_hi, score_lo = coarse_to_fine(D_hi, n_samples, landmarks, seed=seed, effort=effort)
+    elif score_hi is None:
         score_hi = witness_search(D_hi, n_samples, landmarks, seed=seed, effort=effort)
     maps_hi = [score_hi.witness] + list(getattr(score_hi, "maps", ()))
     D_lo = D_hi[:m_lo, :m_lo]
-    warm = [t for t in maps_hi if t.max() < m_lo]
-    lo = witness_search(D_lo, n_samples, landmarks, seed=seed, effort=effort, starts=warm)
-    maps_lo = [lo.witness] + list(lo.maps)
+    if score_lo is None:
+        warm = [t for t in maps_hi if t.max() < m_lo]
+        score_lo = witness_search(D_lo, n_samples, landmarks, seed=seed, effort=effort, starts=warm)
+    maps_lo = [score_lo.witness] + list(score_lo.maps)
     sig_lo, _ = _best_global(D_lo, n_samples, maps_lo, covering_radius)
     # a map over Y_lo is a map over Y: the maps found at M/2 count at M too
     sig_hi, w = _best_global(D_hi, n_samples, maps_hi + maps_lo, covering_radius)

@@ -28,6 +28,7 @@ import numpy as np
 from shapecond.jsonable import jsonable
 from shapecond.errors import TooLargeError
 from shapecond.limits import check_cost, search_seconds
+from shapecond.symmetry.resolution import coarse_to_fine, two_levels
 from shapecond.symmetry.search import _prepare, best_single_swap, witness_search
 
 #: ``exact="auto"`` computes σ exactly when enumeration is quick (<= this many maps).
@@ -49,6 +50,9 @@ class SymmetryScore:
     upper_method : "exact", "isometry" (the witness is one: σ = inf), "lp" or "none".
     maps, sigmas : distinct local optima of the search, best first (warm starts).
     notes : human-readable remarks (LP refused, exact not finished, ...).
+    coarse : with dense targets, the search over the first M/2 targets that the
+        search over Y was refined from (``resolution.coarse_to_fine``; the
+        resolution report's lower level), else None.
     """
 
     sigma_lower: float
@@ -64,6 +68,7 @@ class SymmetryScore:
     maps: tuple = field(default=(), repr=False)
     sigmas: tuple = ()
     notes: tuple = ()
+    coarse: object = field(default=None, repr=False)
 
     @property
     def sigma_hat_lower(self) -> float:
@@ -126,14 +131,24 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
         (otherwise they are skipped with a note and the bracket keeps its bounds).
     search : a ``witness_search`` result for the same D, N, landmarks and seed, to
         reuse instead of searching again (``api.SymmetryProblem`` keeps them).
+
+    With many dense targets (``resolution.two_levels``: N = 400, M = 3,200) the
+    search runs over the first M/2 targets and its maps are then refined over
+    all M (``resolution.coarse_to_fine``): the same σ or higher on the TOSCA null
+    shapes for a fraction of the time, and the lower level is kept (``coarse``)
+    for the resolution report.
     """
     t0 = time.perf_counter()
     D, n, lm, _ = _prepare(D, n_samples, landmarks)
     m = D.shape[0]
     notes = []
+    coarse = None
     if search is None:
         check_cost(f"the witness search at N = {n}, M = {m}", search_seconds(n, m), force=force)
-        res = witness_search(D, n, lm, seed=seed, effort=effort)
+        if two_levels(n, m):
+            res, coarse = coarse_to_fine(D, n, lm, seed=seed, effort=effort)
+        else:
+            res = witness_search(D, n, lm, seed=seed, effort=effort)
     else:
         res = search
     floor = best_single_swap(D, n, lm)[0]
@@ -175,4 +190,4 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
     return SymmetryScore(
         sigma_lower=lower, sigma_upper=hi, sigma_exact=sigma_exact, witness=witness, swap_floor=floor,
         n_points=n, n_targets=m, landmarks=tuple(int(v) for v in lm), seconds=time.perf_counter() - t0,
-        upper_method=method, maps=res.maps, sigmas=res.sigmas, notes=tuple(notes))
+        upper_method=method, maps=res.maps, sigmas=res.sigmas, notes=tuple(notes), coarse=coarse)

@@ -128,6 +128,26 @@ def swap_terms(X: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return 2.0 * Xf**2, 4.0 * np.maximum(Q, 0.0)
 
 
+def best_reassignment(D, n, free) -> np.ndarray:
+    """The identity with one free sample sent to a target outside X: the best such map by σ.
+
+    Σ_x (D[x,a] − D[x,y])² for all pairs (a, y) from one product; a thin tip's
+    sample sent to a target just beside it is often the dense witness of a
+    shape without symmetry.
+    """
+    ys = np.arange(n, D.shape[0])
+    t = np.arange(n, dtype=np.int64)
+    if free.size == 0 or ys.size == 0:
+        return t
+    X, Y = D[:n, free], D[:n, ys]
+    sq = np.sum(X**2, axis=0)[:, None] + np.sum(Y**2, axis=0)[None, :] - 2.0 * X.T @ Y
+    num = D[np.ix_(free, ys)] ** 2
+    den = 2.0 * np.maximum(sq - num, 1e-300)  # the x = a term is D[a,y]²
+    i, j = np.unravel_index(int(np.argmax(num / den)), num.shape)
+    t[free[i]] = ys[j]
+    return t
+
+
 def widest_swap(D, n, free, budget) -> tuple[int, int]:
     """The swap of two free samples with the largest d² among those with Dist² ≤ ``budget``
     (``(-1, -1)`` if none)."""
@@ -345,17 +365,8 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
         # bijection of X (below the best swap, so never among the maps above)
         # but 3.3-3.7 over Y; no start built on X alone reaches that basin
         refine += S.reflection_starts(D, n, free, lm, *cfg["reflect"])
-        ys = np.arange(n, m)
-        if free.size >= 1 and ys.size:  # best single reassignment x -> y outside X
-            X, Y = D[:n, free], D[:n, ys]
-            # Σ_x (D[x,a] − D[x,y])² for all (a, y) by one product
-            sq = np.sum(X**2, axis=0)[:, None] + np.sum(Y**2, axis=0)[None, :] - 2.0 * X.T @ Y
-            num = D[np.ix_(free, ys)] ** 2
-            den = 2.0 * np.maximum(sq - num, 1e-300)  # the x = a term is D[a,y]²
-            i, j = np.unravel_index(int(np.argmax(num / den)), num.shape)
-            t = np.arange(n, dtype=np.int64)
-            t[free[i]] = ys[j]
-            refine.append(t)
+        if free.size >= 1:
+            refine.append(best_reassignment(D, n, free))
         for t in refine:
             run(dense, t)
         for i in range(cfg["dense_kicks"]):
