@@ -80,3 +80,23 @@ def test_too_few_targets_for_two_levels_searches_once(m, monkeypatch):
     sc = symmetry_score(D, 5, exact=False)
     assert sc.coarse is None
     assert same(sc.sigma_lower, witness_search(D, 5).sigma)
+
+
+def test_score_shape_in_two_levels_keeps_delta_within_its_budget(monkeypatch):
+    """δ(ε) searched over the first M/2 targets and refined over M: a feasible witness, at least the coarse δ."""
+    from shapecond.api import metric_shape
+    from shapecond.symmetry import report
+    from shapecond.symmetry.scale import scale_score
+
+    monkeypatch.setattr(resolution, "TWO_LEVEL_SECONDS", 0.0)
+    shape = metric_shape("demo:animal", n_points=16, target="dense", cache=False)
+    m = shape.D.shape[0]
+    r = report.score_shape(shape)
+    assert r.score.coarse is not None and r.resolution.n_targets_lo == m // 2
+    d = r.scale
+    assert d.distortion <= d.epsilon * (1 + 1e-9)
+    assert same(d.displacement, math.sqrt(obj.d2(shape.D, d.witness) / 16))
+    sc = r.score
+    starts = [sc.coarse.witness, *sc.coarse.maps] + [t for t in (sc.witness, *sc.maps) if t.max() < m // 2]
+    coarse = scale_score(shape.D[: m // 2, : m // 2], 16, starts=starts)  # the lower level δ was refined from
+    assert d.displacement >= coarse.displacement * (1 - 1e-12) or d.isometry
