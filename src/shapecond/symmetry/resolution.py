@@ -152,7 +152,7 @@ def coarse_to_fine(D, n_samples, landmarks=(), seed=0, effort="default", starts=
     levels the report compares.  Cheaper than a search at each level: the local
     search's moves cost O(N·M) each, and at M_lo most of them are already made.
     On the eight TOSCA null shapes (N = 400, M = 3,200) σ is as high as a full
-    search over Y, or higher, in about half its time.
+    search over Y, or higher, in less time.
     """
     D, n, lm, free = _prepare(D, n_samples, landmarks)
     m_lo = coarse_level(D.shape[0], n)
