@@ -36,6 +36,7 @@ import os
 import socket
 import sys
 import time
+import uuid
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, wait
 
@@ -252,9 +253,12 @@ def _iter_dask(client, tasks):
     """Tasks as Dask futures; an unavailable cluster ends the run with an InputError, not a hang."""
     from dask.distributed import wait as dask_wait
 
+    # one key prefix for every task of the run: Dask then sees one large task group
+    # ("root-ish") and queues it on the scheduler, handing a worker only what it can run
+    # now, so a task that kills its worker takes no innocent task queued behind it along
     futures = {}
     for i, (f, a, k) in enumerate(tasks):
-        futures[client.submit(f, *a, pure=False, **k)] = i
+        futures[client.submit(f, *a, key=f"shapecond-task-{uuid.uuid4().hex}", **k)] = i
     remaining, idle_since = set(futures), None
     try:
         while remaining:
