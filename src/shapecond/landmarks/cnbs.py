@@ -61,10 +61,11 @@ is the choice.  And each next heat map of δ starts from a fresh ``witness_searc
 the new landmark (warm-started from the chosen candidate's maps), not from those maps
 alone: warm starts repaired from maps of fewer landmarks miss the widest map within the
 budget (on TOSCA wolf, heat values of 0.06 where a fresh search finds δ = 0.137), and the
-heat map can only rank candidates against a base that has it.  Everything is deterministic given ``seed``,
-whatever the number of BLAS threads: the entry points run with one
-(``limits.single_blas_thread``), since a threaded product sums in another order and
-the greedy follows near-ties of such sums.
+heat map can only rank candidates against a base that has it.
+
+Everything is deterministic given ``seed``, whatever the number of BLAS threads: the
+entry points run with one (``limits.single_blas_thread``), since a threaded product
+sums in another order and the greedy follows near-ties of such sums.
 """
 
 from __future__ import annotations
