@@ -139,6 +139,15 @@ def check_ids(values, name: str = "landmarks") -> list[int]:
     return out
 
 
+def check_landmark_count(k, n: int, fixed=()) -> list[int]:
+    """``k`` more landmarks among ``n`` samples beside ``fixed`` (sample indices, returned as a
+    list of int): ``InputError`` when they do not fit."""
+    fixed = [int(i) for i in fixed]
+    if k < 0 or k + len(fixed) > n:
+        raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(fixed)} already fixed)")
+    return fixed
+
+
 def read_ids(path, name: str | None = None) -> list[int]:
     """Vertex ids from a text file: the first column of each non-empty line.
 

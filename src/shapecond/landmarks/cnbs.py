@@ -76,6 +76,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..checks import check_landmark_count
 from ..errors import InputError
 from ..limits import single_blas_thread
 from ..symmetry.objective import ISOMETRY_RTOL
@@ -418,9 +419,7 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
     search = _search_module()
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
     n = D.shape[0] if n_samples is None else int(n_samples)
-    L = [int(v) for v in fixed]
-    if k < 0 or k + len(L) > n:
-        raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(L)} already fixed)")
+    L = check_landmark_count(k, n, fixed)
     if base is None:
         base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort, budget=budget)
     initial = float(base.sigma)

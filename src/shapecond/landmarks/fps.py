@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..checks import check_landmark_count
 
 
 def fps_landmarks(D: np.ndarray, n_samples: int, k: int, seed: int = 0, fixed=()) -> list[int]:
@@ -31,9 +31,7 @@ def fps_landmarks(D: np.ndarray, n_samples: int, k: int, seed: int = 0, fixed=()
     list of int, the new landmarks in order.
     """
     n = int(n_samples)
-    fixed = [int(i) for i in fixed]
-    if k < 0 or k + len(fixed) > n:
-        raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(fixed)} already fixed)")
+    fixed = check_landmark_count(k, n, fixed)
     Dx = np.asarray(D, dtype=float)[:n, :n]
     chosen: list[int] = []
     if fixed:

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from ..checks import check_landmark_count
 
 N_BINS = 16
 
@@ -64,9 +64,7 @@ def pls_landmarks(D: np.ndarray, n_samples: int, k: int, fixed=(), block: int = 
         The new landmarks in order, and the total entropy Σ_x H(x) after each.
     """
     n = int(n_samples)
-    fixed = [int(i) for i in fixed]
-    if k < 0 or k + len(fixed) > n:
-        raise InputError(f"cannot choose {k} landmarks among {n} samples ({len(fixed)} already fixed)")
+    fixed = check_landmark_count(k, n, fixed)
     Dx = np.asarray(D, float)[:n, :n]
     f = distance_histograms(Dx, n)
     fd2 = ((f[:, None, :] - f[None, :, :]) ** 2).sum(axis=2)
