@@ -362,7 +362,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
             if values[p] > window:
                 continue  # already a lower bound above the tie
             if pruned[p]:
-                pruned[p] = evaluate(p, window if prune else math.inf)
+                pruned[p] = evaluate(p, window)  # only a pruned search is resumed
             if not pruned[p] and values[p] <= window and not verified[p] and rounds < max_verify:
                 verify(p)
             if not pruned[p] and values[p] <= window:

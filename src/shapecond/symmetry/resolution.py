@@ -49,7 +49,7 @@ from shapecond.jsonable import jsonable
 from shapecond.limits import one_blas_thread, search_seconds
 from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.search import (DENSE_K, EFFORTS, KEEP, MapPool, SearchResult, SearchStage, _prepare,
+from shapecond.symmetry.search import (DENSE_K, EFFORTS, MapPool, SearchResult, SearchStage, _prepare,
                                       best_reassignment, witness_search)
 from shapecond.symmetry.starts import reflection_starts
 
@@ -118,7 +118,7 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
     A map over the first M_lo targets is a map over all M (FPS prefix), so the
     maps a search found over Y_lo, each polished once over Y, are the maps of a
     search over Y that starts where Y_lo left off.  ``budget``: the scale-aware
-    objective (``witness_search(budget=...)``).  Returns the ``KEEP`` best
+    objective (``witness_search(budget=...)``).  Returns the ``search.KEEP`` best
     distinct maps, the given ones included, as a ``SearchResult``.
     """
     t0 = time.perf_counter()
@@ -134,14 +134,7 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
             pool.add(t)
             if pool.best_value() < math.inf:
                 pool.add(stage.polish(t, mode=mode, s=s, anchors=lm))
-    tops = [it for it in pool.top(KEEP) if it[0] > 0.0]
-    if not tops:  # no moving map (within the budget): the identity, as ``witness_search`` reports it
-        ident = np.arange(n, dtype=np.int64)
-        return SearchResult(0.0, ident, 0.0, 0.0, (ident,), (0.0,), time.perf_counter() - t0)
-    sig = [math.inf if v == math.inf else math.sqrt(max(v, 0.0)) for v, *_ in tops]
-    _, t, num, den = tops[0]
-    return SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den, maps=tuple(it[1] for it in tops),
-                        sigmas=tuple(sig), seconds=time.perf_counter() - t0)
+    return pool.result(time.perf_counter() - t0)
 
 
 def coarse_to_fine(D, n_samples, landmarks=(), seed=0, effort="default", starts=(),

@@ -235,6 +235,21 @@ class MapPool:
     def best_value(self) -> float:
         return max((it[0] for it in self.items.values()), default=0.0)
 
+    def result(self, seconds: float) -> SearchResult:
+        """The ``KEEP`` best moving maps as a ``SearchResult`` (σ, or sqrt(d²) with a budget);
+        with a budget and no moving map within it, the identity (δ = 0)."""
+        tops = [it for it in self.top(KEEP) if it[0] > 0.0]
+        if not tops and self.budget is not None:
+            ident = np.arange(self.n, dtype=np.int64)
+            return SearchResult(sigma=0.0, witness=ident, d2=0.0, dist2=0.0, maps=(ident,), sigmas=(0.0,),
+                                seconds=seconds)
+        if not tops:  # cannot happen with >= 2 free samples; kept as a guard
+            raise InputError("no non-identity map satisfies the landmarks")
+        _, t, num, den = tops[0]
+        sig = [math.inf if it[0] == math.inf else math.sqrt(it[0]) for it in tops]
+        return SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den, maps=tuple(it[1] for it in tops),
+                            sigmas=tuple(sig), seconds=seconds)
+
 
 def kick(rng, t, free, size):
     """Rotate the images of ``size`` random free samples (an ILS perturbation)."""
@@ -375,15 +390,4 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
             base = pool.top(2)[i % 2 if len(pool.items) > 1 else 0][1]
             run(dense, _dense_kick(rng, base, free, dense.knn, m,
                                    int(rng.integers(2, max(3, free.size // 10) + 1))))
-    tops = [it for it in pool.top(KEEP) if it[0] > 0.0]
-    if not tops and budget is not None:  # no moving map within the budget: the identity
-        ident = np.arange(n, dtype=np.int64)
-        return SearchResult(sigma=0.0, witness=ident, d2=0.0, dist2=0.0, maps=(ident,), sigmas=(0.0,),
-                            seconds=time.perf_counter() - t_start)
-    if not tops:  # cannot happen with >= 2 free samples; kept as a guard
-        raise InputError("no non-identity map satisfies the landmarks")
-    v, t, num, den = tops[0]
-    sig = [math.inf if it[0] == math.inf else math.sqrt(it[0]) for it in tops]
-    return SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den,
-                        maps=tuple(it[1] for it in tops), sigmas=tuple(sig),
-                        seconds=time.perf_counter() - t_start)
+    return pool.result(time.perf_counter() - t_start)
