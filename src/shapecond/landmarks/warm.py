@@ -83,6 +83,8 @@ class WarmPolisher:
             key = t.tobytes()
             if key not in seen:
                 seen.add(key)
+                # the search leaves G at its starting map: the repairs need the product of t
+                G = obj.cross_product(self.D, t)
                 self.base.append((t, G, H, d2v, dist2v))
 
     def _repaired(self, b, p):
@@ -158,7 +160,7 @@ class WarmPolisher:
                 if self.budget is None:
                     pruned = keep(t0, d20, dist20, None)
                 else:
-                    pruned = search(t0.copy(), self.base[b][1].copy(), self.base[b][2].copy(),
+                    pruned = search(t0.copy(), self.base[b][1], self.base[b][2].copy(),  # G is only read
                                     _used(t0, m), d20, dist20)
             else:
                 t, G, H, used, d2v, dist2v = self._repaired(b, p)
