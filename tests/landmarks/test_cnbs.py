@@ -158,3 +158,28 @@ def test_pruned_heat_map_never_returns_a_pruned_argmin(max_verify):
         hm = heat_map(D, 18, seed=0, prune=True, max_verify=max_verify)
         c = hm.argmin()
         assert not hm.pruned[c] and c in hm.results
+
+
+@pytest.mark.parametrize("budget", [None, "scale"])
+def test_heat_map_is_the_same_in_one_thread_and_in_two(budget):
+    """Candidates run in parallel threads in chunks of ``CHUNK`` against the incumbent of the chunks
+    before, with kicks seeded by (seed, candidate): the values, pruned or not, cannot depend on the
+    thread count."""
+    import numba
+
+    from shapecond.symmetry.scale import budget_of, default_epsilon
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("numba has one thread on this machine")
+    D = near_symmetric(60, 4, noise=0.05)
+    b = None if budget is None else budget_of(default_epsilon(D), 60, D)
+    out = []
+    before = numba.get_num_threads()
+    try:
+        for k in (1, 2):
+            numba.set_num_threads(k)
+            out.append([heat_map(D, 60, [3], effort="quick", prune=prune, budget=b).values for prune in (False, True)])
+    finally:
+        numba.set_num_threads(before)
+    for a, c in zip(*out):
+        np.testing.assert_array_equal(a, c)

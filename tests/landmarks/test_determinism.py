@@ -28,7 +28,8 @@ print(json.dumps(out))
 
 
 def _run(threads: str) -> dict:
-    env = dict(os.environ, OPENBLAS_NUM_THREADS=threads, OMP_NUM_THREADS=threads, MKL_NUM_THREADS=threads)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS=threads, OMP_NUM_THREADS=threads, MKL_NUM_THREADS=threads,
+               NUMBA_NUM_THREADS=threads)
     tests = os.path.dirname(os.path.abspath(__file__))
     res = subprocess.run([sys.executable, "-c", SCRIPT.format(tests=tests)], env=env, capture_output=True,
                          text=True, timeout=600, check=True)
@@ -36,9 +37,9 @@ def _run(threads: str) -> dict:
 
 
 def test_cnbs_selections_are_identical_across_processes_and_thread_counts():
-    """Two processes, one BLAS thread and two: the same landmarks and the same scores to the bit
-    (the evaluation selects landmarks in pool workers limited to one thread per core, a user's
-    command line in a process with every core)."""
+    """Two processes, one BLAS and numba thread and two (the heat map's candidates then run in two
+    threads): the same landmarks and the same scores to the bit (the evaluation selects landmarks in
+    pool workers limited to one thread per core, a user's command line in a process with every core)."""
     assert _run("1") == _run("2")
 
 

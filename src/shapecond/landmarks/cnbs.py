@@ -26,8 +26,8 @@ heat map is a lower bound per candidate, assembled in four steps:
    costs 8-18 s at N = 400 on the shared machine (its spectral and Gilmore-Lawler
    starts do not depend on p but are recomputed), so the default re-solve is an
    iterated local search instead: ``N_KICKS`` random kicks (random swaps of free
-   samples, applied by rank-1 updates) of the repaired base maps, each polished
-   (``resolve="ils"``);
+   samples, applied by rank-1 updates, drawn from a generator seeded by the seed and
+   the candidate) of the repaired base maps, each polished (``resolve="ils"``);
    ``resolve="full"`` gives the prototype's behaviour.  Whether the argmin agrees
    with full re-solves of every candidate is checked in tests (small N) and in
    ``benchmarks/bench_landmarks.py``.
@@ -38,15 +38,17 @@ heat map is a lower bound per candidate, assembled in four steps:
    miss a map that only exists with p fixed; this catches it where it matters.
 
 6. **Pruning** (``prune=True``, what ``cnbs_landmarks`` uses).  Candidates are
-   evaluated in tie-break order, and each search stops as soon as its value passes the
-   smallest complete value so far (``_kernels.local_search``'s ``stop``): values only
-   grow during a search, so such a candidate cannot be the argmin.  Candidates whose
+   evaluated in tie-break order, in chunks of ``CHUNK`` searched by parallel threads
+   (``shapecond.threads``), and each search stops as soon as its value passes the
+   smallest complete value of the chunks before (``_kernels.local_search``'s ``stop``):
+   values only grow during a search, so such a candidate cannot be the argmin.  The
+   chunks are fixed and each candidate's search depends on nothing else, so the heat
+   map is the same with any number of threads.  Candidates whose
    floor alone reaches the incumbent are not searched at all (they lose the tie).  A
    pruned candidate that becomes the argmin after verification raised the leader's
    value is evaluated in full before it is accepted.  Pruned values are weaker (still
    valid) lower bounds, marked in ``HeatMap.pruned``; pictures use the unpruned map.
-   On cat0 at N = 400 this cut 15 landmarks from 490 s to about 75 s of CPU
-   (benchmarks/RESULTS.md).
+   On TOSCA cat0 at N = 400 this cut 15 landmarks from 490 s to about 75 s of CPU.
 
 Ties (all heat values inf on an exactly symmetric shape, for instance) are broken by
 the larger move, then the smaller index.  On the scale-aware score (``budget``) values
@@ -80,6 +82,7 @@ from ..checks import check_landmark_count
 from ..errors import InputError
 from ..limits import single_blas_thread
 from ..symmetry.objective import ISOMETRY_RTOL
+from ..threads import thread_map
 from .warm import WarmPolisher, _search_module
 
 #: Share of the candidates, those moved farthest by the witness maps, that get a
@@ -91,6 +94,9 @@ N_MAPS = 4
 N_KICKS = 6
 #: Up to this N the leaders of a heat map are verified by a fresh witness_search.
 FULL_VERIFY_N = 200
+#: Candidates searched together (in parallel threads) against the same incumbent.  Fixed,
+#: not the thread count, so that the heat map is the same on any machine.
+CHUNK = 8
 
 
 def swap_scores(D: np.ndarray, n: int) -> np.ndarray:
@@ -269,7 +275,6 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     resolved = np.zeros(n, dtype=bool)
     pruned = np.zeros(n, dtype=bool)
     values[cand] = floor[cand]
-    rng = np.random.default_rng(seed)
     tie, spread = 0.0, None
     if budget is not None and L:
         from ..symmetry.scale import resolution
@@ -298,21 +303,26 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
             r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort,
                                       budget=budget)
         else:  # "ils": kicked copies of the repaired base maps, polished
-            r, cut = polish.bounded(L + [p], p, rng=rng, n_kicks=n_kicks, stop=stop)
+            # the kicks of candidate p depend on (seed, p) alone: the same in any order and thread
+            r, cut = polish.bounded(L + [p], p, rng=np.random.default_rng([seed, p]), n_kicks=n_kicks,
+                                    stop=stop)
         resolved[p] = True
         take(p, r)
         return cut
 
-    # candidates in tie-break order; with ``prune`` each search stops once it passes the
-    # smallest complete value so far (the incumbent): such a candidate cannot be the argmin
+    # candidates in tie-break order, in chunks of CHUNK searched by parallel threads; with
+    # ``prune`` each search stops once it passes the smallest complete value of the chunks
+    # before (the incumbent): such a candidate cannot be the argmin
     incumbent = math.inf
-    for k, p in enumerate(order):
-        p = int(p)
-        pruned[p] = evaluate(p, incumbent if prune else math.inf)
-        if not pruned[p]:
-            incumbent = min(incumbent, values[p])
+    for k0 in range(0, order.size, CHUNK):
+        chunk = [int(p) for p in order[k0:k0 + CHUNK]]
+        stop = incumbent if prune else math.inf
+        for p, cut in zip(chunk, thread_map(lambda p: evaluate(p, stop), chunk)):
+            pruned[p] = cut
+            if not cut:
+                incumbent = min(incumbent, values[p])
         if progress:
-            progress(k + 1, order.size)
+            progress(min(k0 + CHUNK, order.size), order.size)
     # 5. verify the leaders: the current argmin is searched again from the best maps
     # found for the other candidates (any of them, repaired to fix p, is feasible) and,
     # for N <= FULL_VERIFY_N or resolve="full", by a fresh witness_search warm-started

@@ -49,9 +49,10 @@ from shapecond.jsonable import jsonable
 from shapecond.limits import one_blas_thread, search_seconds
 from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.search import (DENSE_K, EFFORTS, MapPool, SearchResult, SearchStage, _prepare,
+from shapecond.symmetry.search import (DENSE_K, EFFORTS, RUN_CHUNK, MapPool, SearchResult, SearchStage, _prepare,
                                       best_reassignment, witness_search)
 from shapecond.symmetry.starts import reflection_starts
+from shapecond.threads import thread_map
 
 CONVERGED_RTOL = 0.10
 #: ``two_levels``: dense searches estimated to take at least this long run in two levels.
@@ -126,14 +127,22 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
     stage = SearchStage(D, n, free, DENSE_K)
     pool = MapPool(D, n, budget, lm)
     mode, s = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
+    first = {}  # each distinct map once, in order of first appearance
+    for t in maps:
+        t = np.asarray(t, dtype=np.int64)
+        first.setdefault(t.tobytes(), t)
+    maps = list(first.values())
     with one_blas_thread():
-        for t in maps:
-            t = np.asarray(t, dtype=np.int64)
-            if t.tobytes() in pool.items:  # polished already (the witness is also the first map)
-                continue
-            pool.add(t)
-            if pool.best_value() < math.inf:
-                pool.add(stage.polish(t, mode=mode, s=s, anchors=lm))
+        for i in range(0, len(maps), RUN_CHUNK):
+            chunk = maps[i:i + RUN_CHUNK]
+            # polished in parallel threads, taken in order: the pool of a serial loop
+            done = thread_map(lambda t: stage.polish(t, mode=mode, s=s, anchors=lm), chunk)
+            for t, u in zip(chunk, done):
+                if t.tobytes() in pool.items:  # polished already (the witness is also the first map)
+                    continue
+                pool.add(t)
+                if pool.best_value() < math.inf:
+                    pool.add(u)
     return pool.result(time.perf_counter() - t0)
 
 

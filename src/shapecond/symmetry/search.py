@@ -18,6 +18,12 @@ d² − s·Dist², random starts, then iterated local search (random kicks of th
 best maps).  With dense targets all of this runs on the bijections of X first
 (G is N × N, cheap) and the best few maps are then refined over Y.
 
+The starts of a phase are independent: they are polished by parallel threads
+(``shapecond.threads``, ``RUN_CHUNK`` at a time) and their results taken in order,
+which gives the pool of polishing them one after the other, with any number of
+threads (the ladder and the kicks, each built from the results before it, stay
+serial).
+
 Perfect symmetry: a map whose exact Dist² is round-off
 (``objective.is_isometry``) gives σ = ``math.inf`` and stops the search.  The
 identity (d² = 0) is never a witness.  Given a seed the result is
@@ -39,6 +45,7 @@ from shapecond.symmetry import objective as obj
 from shapecond.symmetry import starts as S
 
 from shapecond.limits import one_blas_thread
+from shapecond.threads import thread_map
 
 #: Work per effort level: MDS coordinates / reflection starts kept, spectral vectors / sign pairs / starts polished,
 #: Gilmore-Lawler grid size / starts polished, ladder runs, random starts,
@@ -58,6 +65,8 @@ EFFORTS = {
 DENSE_K = 16
 #: How many distinct local optima a result keeps (warm starts for CNBS).
 KEEP = 5
+#: Starts polished at once by parallel threads (``threads``) between two looks at the time limit.
+RUN_CHUNK = 8
 
 
 @dataclass(frozen=True)
@@ -317,9 +326,21 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
     warm = [S.repair(t, n, m, lm) for t in starts]
     warm_bij = [t for t in warm if t.max() < n]
 
+    def run_all(stage, ts):
+        """Polish every start of ``ts`` (parallel threads), adding the results in order until
+        ``late()``: the same pool as polishing them one after the other (``threads``)."""
+        ts = list(ts)
+        for i in range(0, len(ts), RUN_CHUNK):
+            if late():
+                return
+            done = thread_map(lambda t: stage.polish(t, mode=mode, s=s_obj, anchors=lm), ts[i:i + RUN_CHUNK])
+            for t in done:
+                if late():
+                    return
+                pool.add(t)
+
     def run(stage, t):
-        if not late():
-            pool.add(stage.polish(t, mode=mode, s=s_obj, anchors=lm))
+        run_all(stage, [t])
 
     # 1. best single swap (exact) and warm starts
     s_swap = 0.0
@@ -330,24 +351,20 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
         if a >= 0:
             pool.add(S.swap_map(n, a, b))
             run(bij, S.swap_map(n, a, b))
-    for t in warm_bij:
-        run(bij, t)
+    run_all(bij, warm_bij)
     if free.size >= 3:
         # 2. spectral sign-flip starts, the most promising ones polished
         cand = S.spectral_starts(bij.D, free, cfg["vectors"], cfg["pairs"])
         cand.sort(key=lambda t: -pool.value(t)[0])
-        for t in cand[: cfg["spectral"]]:
-            run(bij, t)
+        run_all(bij, cand[: cfg["spectral"]])
         if dense is None:  # with dense targets they are built over Y in step 7
-            for t in S.reflection_starts(bij.D, n, free, lm, *cfg["reflect"]):
-                run(bij, t)
+            run_all(bij, S.reflection_starts(bij.D, n, free, lm, *cfg["reflect"]))
         # 3. Gilmore-Lawler assignment starts over a grid of s
         s_ref = 1.0 / max(s_swap, 1e-6) ** 2 if math.isfinite(s_swap) else 1.0
         grid = [s_ref * 4.0 ** (1 - j) for j in range(cfg["gl"])]
         cand = S.gilmore_lawler_starts(bij.D, free, lm, grid)
         gl_best = sorted(cand, key=lambda t: -pool.value(t)[0])
-        for t in gl_best[: cfg["gl_polish"]]:
-            run(bij, t)
+        run_all(bij, gl_best[: cfg["gl_polish"]])
         # 4. fixed-s ladder: maximise d² − s·Dist² for increasing s, polish each rung
         for r in range(cfg["ladder"]):
             t = gl_best[r] if r < len(gl_best) else S.random_start(rng, n, free)
@@ -362,8 +379,7 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
         # random starts end far below the structured ones on large shapes (TOSCA, N = 400:
         # σ 0.26 against 0.54) while costing the most moves: fewer of them there
         n_random = cfg["random"] if free.size <= 200 else cfg["random"] // 2
-        for _ in range(max(n_random, extra)):
-            run(bij, S.random_start(rng, n, free))
+        run_all(bij, [S.random_start(rng, n, free) for _ in range(max(n_random, extra))])
         # 6. iterated local search: kick one of the best maps, polish
         hi = max(3, min(12, free.size // 8))
         for i in range(max(cfg["kicks"], extra)):
@@ -382,8 +398,7 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
         refine += S.reflection_starts(D, n, free, lm, *cfg["reflect"])
         if free.size >= 1:
             refine.append(best_reassignment(D, n, free))
-        for t in refine:
-            run(dense, t)
+        run_all(dense, refine)
         for i in range(cfg["dense_kicks"]):
             if late():
                 break
