@@ -8,10 +8,14 @@ import re
 import resource
 import subprocess
 import sys
+import tarfile
+import tempfile
 from datetime import date
 from pathlib import Path
 
 RESULTS = Path(__file__).with_name("RESULTS.md")
+ROOT = Path(__file__).resolve().parent.parent
+OUT = Path(__file__).parent / "out"
 
 
 def machine() -> str:
@@ -55,3 +59,23 @@ def run_isolated(code: str, timeout: float = 3600) -> tuple[str, float]:
         raise RuntimeError(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "failed")
     out, rss = proc.stdout.rsplit("__RSS__", 1)
     return out.strip(), float(rss)
+
+
+def git(*args: str) -> str:
+    return subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True, check=True).stdout.strip()
+
+
+def baseline_src(rev: str) -> tuple[str, Path]:
+    """(sha, src folder) of the package at git revision ``rev``, extracted once under benchmarks/out/
+    (a stable path: numba caches its kernels).  Put the folder first on PYTHONPATH to run it."""
+    sha = git("rev-parse", rev)
+    dest = OUT / f"baseline-{sha[:10]}"
+    if not (dest / "src" / "shapecond").exists():
+        dest.mkdir(parents=True, exist_ok=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", sha, "src"], capture_output=True, check=True)
+        with tempfile.TemporaryFile() as f:
+            f.write(archive.stdout)
+            f.seek(0)
+            with tarfile.open(fileobj=f) as tar:
+                tar.extractall(dest, filter="data")
+    return sha, dest / "src"

@@ -28,17 +28,14 @@ import json
 import os
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _results import command_line, machine, write_section  # noqa: E402
+from _results import OUT, baseline_src, command_line, git, machine, write_section  # noqa: E402
 
-ROOT = Path(__file__).resolve().parent.parent
 NULL = ["cat0", "centaur0", "david0", "dog0", "horse0", "michael0", "victoria0", "wolf0"]
-OUT = Path(__file__).parent / "out"
 STORE = OUT / "bench_score_warm.json"
 
 CLI = """
@@ -81,25 +78,6 @@ print("__OUT__" + json.dumps(dict(imports=t1 - t0, load=t2 - t1, total=t3 - t0, 
 
 def mesh(root: Path, name: str) -> Path:
     return root / name.rstrip("0123456789") / f"{name}.off"
-
-
-def git(*args: str) -> str:
-    return subprocess.run(["git", "-C", str(ROOT), *args], capture_output=True, text=True, check=True).stdout.strip()
-
-
-def baseline_src(rev: str) -> tuple[str, Path]:
-    """The package at ``rev`` extracted once under benchmarks/out/ (a stable path: numba caches its kernels)."""
-    sha = git("rev-parse", rev)
-    dest = OUT / f"score-warm-{sha[:10]}"
-    if not (dest / "src" / "shapecond").exists():
-        dest.mkdir(parents=True, exist_ok=True)
-        archive = subprocess.run(["git", "-C", str(ROOT), "archive", sha, "src"], capture_output=True, check=True)
-        with tempfile.TemporaryFile() as f:
-            f.write(archive.stdout)
-            f.seek(0)
-            with tarfile.open(fileobj=f) as tar:
-                tar.extractall(dest, filter="data")
-    return sha, dest / "src"
 
 
 def run(code: str, cache: Path, src: Path | None) -> dict:

@@ -26,8 +26,8 @@ heat map is a lower bound per candidate, assembled in four steps:
    costs 8-18 s at N = 400 on the shared machine (its spectral and Gilmore-Lawler
    starts do not depend on p but are recomputed), so the default re-solve is an
    iterated local search instead: ``N_KICKS`` random kicks (random swaps of free
-   samples, applied by rank-1 updates, drawn from a generator seeded by the seed and
-   the candidate) of the repaired base maps, each polished (``resolve="ils"``);
+   samples, applied by rank-1 updates) of the repaired base maps, each polished
+   (``resolve="ils"``);
    ``resolve="full"`` gives the prototype's behaviour.  Whether the argmin agrees
    with full re-solves of every candidate is checked in tests (small N) and in
    ``benchmarks/bench_landmarks.py``.
@@ -38,12 +38,9 @@ heat map is a lower bound per candidate, assembled in four steps:
    miss a map that only exists with p fixed; this catches it where it matters.
 
 6. **Pruning** (``prune=True``, what ``cnbs_landmarks`` uses).  Candidates are
-   evaluated in tie-break order, in chunks of ``CHUNK`` searched by parallel threads
-   (``shapecond.threads``), and each search stops as soon as its value passes the
-   smallest complete value of the chunks before (``_kernels.local_search``'s ``stop``):
-   values only grow during a search, so such a candidate cannot be the argmin.  The
-   chunks are fixed and each candidate's search depends on nothing else, so the heat
-   map is the same with any number of threads.  Candidates whose
+   evaluated in tie-break order, and each search stops as soon as its value passes the
+   smallest complete value so far (``_kernels.local_search``'s ``stop``): values only
+   grow during a search, so such a candidate cannot be the argmin.  Candidates whose
    floor alone reaches the incumbent are not searched at all (they lose the tie).  A
    pruned candidate that becomes the argmin after verification raised the leader's
    value is evaluated in full before it is accepted.  Pruned values are weaker (still
@@ -64,6 +61,14 @@ the new landmark (warm-started from the chosen candidate's maps), not from those
 alone: warm starts repaired from maps of fewer landmarks miss the widest map within the
 budget (on TOSCA wolf, heat values of 0.06 where a fresh search finds δ = 0.137), and the
 heat map can only rank candidates against a base that has it.
+
+Threads (``shapecond.threads``): with pruning, candidates go one at a time (in chunks the
+incumbent lags behind and prunes far less) and draw their kicks from one generator in
+order; the searches from the starts of one candidate run in parallel and are taken in
+order up to the first above the incumbent, the generator rewound to where a serial loop
+would have left it, so the landmarks are those of a serial run.  Without pruning (the
+pictures), ``CHUNK`` candidates are searched at once, each drawing its kicks from a
+generator seeded by the seed and the candidate.  No result depends on the thread count.
 
 Everything is deterministic given ``seed``, whatever the number of BLAS threads: the
 entry points run with one (``limits.single_blas_thread``), since a threaded product
@@ -94,8 +99,7 @@ N_MAPS = 4
 N_KICKS = 6
 #: Up to this N the leaders of a heat map are verified by a fresh witness_search.
 FULL_VERIFY_N = 200
-#: Candidates searched together (in parallel threads) against the same incumbent.  Fixed,
-#: not the thread count, so that the heat map is the same on any machine.
+#: Candidates of an unpruned heat map searched at once by parallel threads.
 CHUNK = 8
 
 
@@ -276,6 +280,7 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     pruned = np.zeros(n, dtype=bool)
     values[cand] = floor[cand]
     tie, spread = 0.0, None
+    shared = np.random.default_rng(seed)
     if budget is not None and L:
         from ..symmetry.scale import resolution
 
@@ -303,26 +308,28 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
             r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort,
                                       budget=budget)
         else:  # "ils": kicked copies of the repaired base maps, polished
-            # the kicks of candidate p depend on (seed, p) alone: the same in any order and thread
-            r, cut = polish.bounded(L + [p], p, rng=np.random.default_rng([seed, p]), n_kicks=n_kicks,
-                                    stop=stop)
+            # pruned: candidates in order, kicks from one generator (as ever); unpruned: candidates in
+            # parallel, so each draws its kicks from a generator of its own
+            r, cut = polish.bounded(L + [p], p, rng=shared if prune else np.random.default_rng([seed, p]),
+                                    n_kicks=n_kicks, stop=stop)
         resolved[p] = True
         take(p, r)
         return cut
 
-    # candidates in tie-break order, in chunks of CHUNK searched by parallel threads; with
-    # ``prune`` each search stops once it passes the smallest complete value of the chunks
-    # before (the incumbent): such a candidate cannot be the argmin
+    # candidates in tie-break order.  With ``prune`` one at a time (each search stops once it
+    # passes the smallest complete value so far, the incumbent: such a candidate cannot be the
+    # argmin), the searches of a candidate in parallel threads; without, CHUNK candidates at once
     incumbent = math.inf
-    for k0 in range(0, order.size, CHUNK):
-        chunk = [int(p) for p in order[k0:k0 + CHUNK]]
+    step = 1 if prune else CHUNK
+    for k0 in range(0, order.size, step):
+        chunk = [int(p) for p in order[k0:k0 + step]]
         stop = incumbent if prune else math.inf
         for p, cut in zip(chunk, thread_map(lambda p: evaluate(p, stop), chunk)):
             pruned[p] = cut
             if not cut:
                 incumbent = min(incumbent, values[p])
         if progress:
-            progress(min(k0 + CHUNK, order.size), order.size)
+            progress(min(k0 + step, order.size), order.size)
     # 5. verify the leaders: the current argmin is searched again from the best maps
     # found for the other candidates (any of them, repaired to fix p, is feasible) and,
     # for N <= FULL_VERIFY_N or resolve="full", by a fresh witness_search warm-started

@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from ..threads import n_threads, thread_map
+
 
 #: With a budget (the scale-aware score), a base map whose distances from the candidate p
 #: are off by more than sqrt(HOPELESS) = 2 times the RMS budget once p is fixed is not
@@ -142,27 +144,31 @@ class WarmPolisher:
             found.setdefault(t.tobytes(), (r, t))
             return r > stop2
 
-        def search(t, G, H, used, d2v, dist2v):
+        def search(start):
+            """The local search from one prepared start: (t, d², Dist², anchor rows)."""
+            t, G, H, used, d2v, dist2v = start
             rows = obj.anchor_rows(D, t, lm)
             d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, self.mode, self.s, d2v,
                                             dist2v, self.floor, 50 * n, stop2, lm, rows, lb)
-            return keep(t, d2v, dist2v, rows)
+            return t, d2v, dist2v, rows
 
         jobs = [(b, 0) for b in range(len(self.base))]
         if rng is not None and self.base:
             hi = max(3, free.size // 8)
             jobs += [(k % len(self.base), int(rng.integers(2, hi + 1))) for k in range(n_kicks)]
-        pruned = False
-        for b, size in jobs:
-            t0, _, _, d20, dist20 = self.base[b]
-            if size == 0 and t0[p] == p and np.all(t0[lm] == lm):
-                # still a local optimum with p fixed (for σ; with a budget, p's row may now break it)
-                if self.budget is None:
-                    pruned = keep(t0, d20, dist20, None)
-                else:
-                    pruned = search(t0.copy(), self.base[b][1], self.base[b][2].copy(),  # G is only read
-                                    _used(t0, m), d20, dist20)
-            else:
+
+        def starts():
+            """The starts in order: ("keep", state) for a base map still a local optimum with p
+            fixed, ("search", state) for the others (repaired, kicked, or ``extra_starts``)."""
+            for b, size in jobs:
+                t0, G0, H0, d20, dist20 = self.base[b]
+                if size == 0 and t0[p] == p and np.all(t0[lm] == lm):
+                    # still a local optimum with p fixed (for σ; with a budget, p's row may now break it)
+                    if self.budget is None:
+                        yield "keep", (t0, d20, dist20, None)
+                    else:  # G is only read by the search
+                        yield "search", (t0.copy(), G0, H0.copy(), _used(t0, m), d20, dist20)
+                    continue
                 t, G, H, used, d2v, dist2v = self._repaired(b, p)
                 if np.any(t[lm] != lm):
                     continue  # a base map that moves a landmark (cannot happen for true warm maps)
@@ -173,19 +179,34 @@ class WarmPolisher:
                     dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
                     K.apply_swap(D, n, t, G, int(a), int(c))
                     d2v, dist2v = d2v + dd, dist2v + dD
-                pruned = search(t, G, H, used, d2v, dist2v)
-            if pruned:
-                break
-        for t in extra_starts if not pruned else ():
-            t = self.search.S.repair(t, n, m, lm)
-            G = D[:n, :n] @ D[t, :]
-            H = np.sum(D[t, :] ** 2, axis=0)
-            used = np.zeros(m, dtype=bool)
-            used[t] = True
-            if search(t, G, H, used, obj.d2(D, t), obj.dist2(D, t)):
-                pruned = True
-                break
-        return self._result(found, lm), pruned
+                yield "search", (t, G, H, used, d2v, dist2v)
+            for t in extra_starts:
+                t = self.search.S.repair(t, n, m, lm)
+                G = D[:n, :n] @ D[t, :]
+                H = np.sum(D[t, :] ** 2, axis=0)
+                yield "search", (t, G, H, _used(t, m), obj.d2(D, t), obj.dist2(D, t))
+
+        # the searches of a few starts at once in parallel threads (``shapecond.threads``), their
+        # results taken in order up to the first above ``stop``: what a serial loop would keep.
+        # The kicks of the starts prepared beyond that one are undone in ``rng`` too (its state
+        # before each start is kept), so that it moves on exactly as in a serial loop.
+        it, k = starts(), n_threads()
+        while True:
+            chunk, states = [], []
+            for _ in range(k):
+                states.append(None if rng is None else rng.bit_generator.state)
+                st = next(it, None)
+                if st is None:
+                    break
+                chunk.append(st)
+            if not chunk:
+                return self._result(found, lm), False
+            done = iter(thread_map(search, [st for kind, st in chunk if kind == "search"]))
+            for i, (kind, st) in enumerate(chunk):
+                if keep(*(st if kind == "keep" else next(done))):
+                    if rng is not None and i + 1 < len(chunk):
+                        rng.bit_generator.state = states[i + 1]
+                    return self._result(found, lm), True
 
     def _result(self, found, anchors=()):
         """SearchResult of the best maps found, the best two re-scored exactly."""

@@ -34,6 +34,7 @@ import itertools
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
+from shapecond.threads import thread_map
 
 
 def swap_map(n: int, a: int, b: int) -> np.ndarray:
@@ -131,16 +132,24 @@ def spectral_starts(DX: np.ndarray, free: np.ndarray, n_vectors: int = 10,
     k = max(1, min(n_vectors, n - 2))
     patterns = [(i,) for i in range(k)]
     patterns += list(itertools.combinations(range(min(n_pairs, k)), 2))
+    def start(job):
+        phi, pat = job
+        sgn = np.ones(phi.shape[1])
+        sgn[[p for p in pat if p < phi.shape[1]]] = -1.0
+        return _assign((phi * sgn) @ phi.T, free, n)
+
+    jobs = [(phi, pat) for phi in (classical_mds(DX, k), _diffusion(DX, k)) for pat in patterns]
+    return _distinct(thread_map(start, jobs), n)  # linear assignments release the GIL
+
+
+def _distinct(maps, n: int) -> list[np.ndarray]:
+    """``maps`` in order without duplicates and without the identity."""
     out, seen = [], set()
-    for phi in (classical_mds(DX, k), _diffusion(DX, k)):
-        for pat in patterns:
-            sgn = np.ones(phi.shape[1])
-            sgn[[p for p in pat if p < phi.shape[1]]] = -1.0
-            t = _assign((phi * sgn) @ phi.T, free, n)
-            key = t.tobytes()
-            if key not in seen and np.any(t != np.arange(n)):
-                seen.add(key)
-                out.append(t)
+    for t in maps:
+        key = t.tobytes()
+        if key not in seen and np.any(t != np.arange(n)):
+            seen.add(key)
+            out.append(t)
     return out
 
 
@@ -167,14 +176,7 @@ def gilmore_lawler_starts(DX: np.ndarray, free: np.ndarray, landmarks: np.ndarra
     n = DX.shape[0]
     W = DX**2
     GL = gilmore_lawler(DX, landmarks)
-    out, seen = [], set()
-    for s in s_values:
-        t = _assign(W - s * GL, free, n)
-        key = t.tobytes()
-        if key not in seen and np.any(t != np.arange(n)):
-            seen.add(key)
-            out.append(t)
-    return out
+    return _distinct(thread_map(lambda s: _assign(W - s * GL, free, n), list(s_values)), n)
 
 
 def _landmark_mds(D: np.ndarray, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
