@@ -260,6 +260,12 @@ class MapPool:
                             sigmas=tuple(sig), seconds=seconds)
 
 
+def kick_limit(n_free: int) -> int:
+    """Largest kick of the iterated local searches: N/8 swaps, between 3 and 12 (a kick is 2 to
+    this many; larger ones cost many moves to polish and rarely end higher)."""
+    return max(3, min(12, n_free // 8))
+
+
 def kick(rng, t, free, size):
     """Rotate the images of ``size`` random free samples (an ILS perturbation)."""
     t = t.copy()
@@ -381,7 +387,7 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
         n_random = cfg["random"] if free.size <= 200 else cfg["random"] // 2
         run_all(bij, [S.random_start(rng, n, free) for _ in range(max(n_random, extra))])
         # 6. iterated local search: kick one of the best maps, polish
-        hi = max(3, min(12, free.size // 8))
+        hi = kick_limit(free.size)
         for i in range(max(cfg["kicks"], extra)):
             if late():
                 break
