@@ -4,7 +4,7 @@ A request that would take hours or exhaust memory is refused up front with its
 estimate and the option that forces it (``--force``, ``force=True``); one that
 takes more than a minute starts with a :class:`CostWarning` saying how long.
 The constants are per-unit costs measured on the 2-core reference machine
-(``benchmarks/RESULTS.md``, section "limits"); estimates are meant to be right
+(by the project's benchmarks, not shipped with the package); estimates are meant to be right
 within a small factor, which is all a refusal needs.
 """
 

@@ -44,7 +44,7 @@ from .solver import SHIFT, ShiftInvertSolver
 
 LAMBDA_REF = 2.0
 ZERO_TOL = 1e-3
-MAX_VERTICES = 300_000  # measured: 1 GB and ~10 s at 111k vertices (benchmarks/RESULTS.md)
+MAX_VERTICES = 300_000  # measured: 1 GB and ~10 s at 111k vertices (the project's benchmarks)
 
 
 @dataclass(frozen=True, eq=False)

@@ -13,7 +13,7 @@ ncv = 30, tol = 1e-8: ~31 solves).
 
 Backends (``backend=``), picked by measurement (the table of factorisation and
 solve times per backend and mesh size, and the alternatives tried, are in
-``benchmarks/RESULTS.md``, section "Local score solver backends"):
+the project's benchmark results, not shipped with the package):
 
 * ``cholmod`` (default): CHOLMOD through ``cholespy``, a sub-1 MB wheel, 2.7x faster
   than SuperLU to factorise at 53k vertices and 2.2x per solve, about half the memory;

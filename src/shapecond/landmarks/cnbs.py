@@ -29,8 +29,8 @@ heat map is a lower bound per candidate, assembled in four steps:
    samples, applied by rank-1 updates) of the repaired base maps, each polished
    (``resolve="ils"``);
    ``resolve="full"`` gives the prototype's behaviour.  Whether the argmin agrees
-   with full re-solves of every candidate is checked in tests (small N) and in
-   ``benchmarks/bench_landmarks.py``.
+   with full re-solves of every candidate is checked in tests (small N) and by the
+   project's landmark benchmark on TOSCA.
 5. **Leader verification.**  The argmin is searched again from the best maps found
    for the ``n_cross`` highest-valued other candidates (repaired to fix it) and, for
    N <= ``FULL_VERIFY_N``, by a fresh ``witness_search``; if its value rises, the new

@@ -345,7 +345,7 @@ def _check_evaluation_cost(plan, n_points, backend, methods, matchers, n_jobs, f
 
     Per shape: its geodesics; per class and method: about 4 witness searches per
     CNBS landmark and 3 searches for the scores; per matching about one second at
-    N = 400, growing like N³ (measured on TOSCA, benchmarks/RESULTS.md).
+    N = 400, growing like N³ (measured on TOSCA by the project's benchmarks).
     """
     from shapecond.limits import cap_jobs, check_cost, geodesic_seconds, search_seconds
 

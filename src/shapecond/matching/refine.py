@@ -24,7 +24,7 @@ smooth counterpart).  A finite ``R`` makes the objective *local*:
 real deformations (TOSCA poses) change long geodesic distances by 5-20 %
 but the distances between nearby samples by a small fraction of the sample
 spacing, so only a local objective has the true map as its maximum (measured
-in ``benchmarks/bench_evaluate.py --matchers``; see ``spectral``'s docstring).
+by the project's evaluation benchmark; see ``spectral``'s docstring).
 
 Moves (``polish``), each evaluated exactly from the gain matrix
 

@@ -55,7 +55,7 @@ They remove the defect (worst ratio 1.000001 on the same 200 instances);
 
 Size: ``f·r + C(f,2)·r(r−1)`` variables (29 057 for 16 points); HiGHS took
 <= 0.1 s at N = 8, 0.2–4 s at N = 12 and 5–90 s at N = 16 in the prototype.
-Measured here (benchmarks/bench_exact_lp.py, 2 shared cores, three runs): 0.03–0.05 s
+Measured by the project's benchmarks (2 shared cores, three runs): 0.03–0.05 s
 at N = 8, 0.2–3.8 s at N = 12, 0.6–16.5 s at N = 14, 1.3–251 s at N = 16 (uniform
 random point sets are the slow case; near-symmetric ones take ~2 s), peak memory
 ~330 MB at N = 16; the variable count doubles every two points, so ``MAX_LP_POINTS = 16``.

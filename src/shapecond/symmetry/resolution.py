@@ -25,7 +25,7 @@ target counts M_lo < M_hi (M_hi = 2 M_lo) and classifies:
 * ``"undecided"``: anything else (σ grows while the distortion is well above
   the resolution, or σ falls); reported honestly rather than forced.
 
-Measured on TOSCA (benchmarks/RESULTS.md, section bench_search): the mirror
+Measured on TOSCA (the project's witness-search benchmark): the mirror
 witnesses of the exactly symmetric null shapes have RMS distortion about
 0.3-0.6 r, deformed poses several r.
 
