@@ -29,7 +29,10 @@ from ``DX = D[:n, :n]``; landmarks are fixed points.  The search refines them
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import itertools
+import threading
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -89,6 +92,39 @@ def _assign(score: np.ndarray, free: np.ndarray, n: int) -> np.ndarray:
     return t
 
 
+def _embedding_memo(f):
+    """Remember the last ``MEMO_SIZE`` results of an embedding ``f(D, k)``, keyed by the content of D.
+
+    The score of a shape runs σ's and δ(ε)'s witness searches on the same samples, and each
+    embeds them (an O(N³) eigendecomposition) for its starts; hashing D costs O(N²).  The
+    arrays returned are read-only, so no caller can change a remembered one.
+    """
+    memo: dict = {}
+
+    @functools.wraps(f)
+    def wrapped(D, k=3):
+        D = np.ascontiguousarray(D, dtype=float)
+        key = (hashlib.blake2b(D.view(np.uint8), digest_size=16).digest(), D.shape, int(k))
+        with _memo_lock:
+            hit = memo.get(key)
+        if hit is None:
+            hit = f(D, k)
+            hit.flags.writeable = False
+            with _memo_lock:
+                memo[key] = hit
+                while len(memo) > MEMO_SIZE:
+                    memo.pop(next(iter(memo)))
+        return hit
+
+    return wrapped
+
+
+#: Embeddings remembered per function (``_embedding_memo``).
+MEMO_SIZE = 4
+_memo_lock = threading.Lock()
+
+
+@_embedding_memo
 def classical_mds(D: np.ndarray, k: int = 3) -> np.ndarray:
     """Classical (Torgerson) MDS coordinates (n, k) of a distance matrix, scaled by sqrt(eigenvalue).
 
@@ -104,6 +140,7 @@ def classical_mds(D: np.ndarray, k: int = 3) -> np.ndarray:
     return np.hstack([X, np.zeros((n, k - X.shape[1]))]) if X.shape[1] < k else X
 
 
+@_embedding_memo
 def _diffusion(DX: np.ndarray, k: int) -> np.ndarray:
     """Diffusion coordinates (n, k) of a Gaussian kernel of DX (constant dropped)."""
     n = DX.shape[0]
