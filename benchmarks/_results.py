@@ -10,6 +10,7 @@ import subprocess
 import sys
 import tarfile
 import tempfile
+import time
 from datetime import date
 from pathlib import Path
 
@@ -79,3 +80,25 @@ def baseline_src(rev: str) -> tuple[str, Path]:
             with tarfile.open(fileobj=f) as tar:
                 tar.extractall(dest, filter="data")
     return sha, dest / "src"
+
+
+def run_variant(code: str, src: Path | None = None, cache: Path | None = None) -> dict:
+    """Python ``code`` in a fresh interpreter, with ``src`` first on the path (a ``baseline_src``; None:
+    the working tree) and ``SHAPECOND_CACHE=cache`` if given: wall, CPU (the process and its children:
+    worker processes count), 1-minute load average before, stdout.  Raises on a non-zero exit."""
+    env = dict(os.environ)
+    if cache is not None:
+        env["SHAPECOND_CACHE"] = str(cache)
+    if src is not None:
+        env["PYTHONPATH"] = str(src)
+    load = os.getloadavg()[0]
+    t = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", code + "\nimport resource\nru, rc = resource.getrusage("
+                           "resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)\n"
+                           "print('__CPU__', ru.ru_utime + ru.ru_stime + rc.ru_utime + rc.ru_stime)"],
+                          capture_output=True, text=True, env=env)
+    wall = time.perf_counter() - t
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "child failed")
+    out, cpu = proc.stdout.rsplit("__CPU__", 1)
+    return dict(wall=wall, cpu=float(cpu), load=load, stdout=out)

@@ -19,13 +19,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
 import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _results import baseline_src, command_line, git, machine, write_section  # noqa: E402
+from _results import baseline_src, command_line, git, machine, run_variant, write_section  # noqa: E402
 
 #: One variant's measurements, printed as JSON by a fresh interpreter.
 WORKER = r"""
@@ -83,13 +81,7 @@ TARGETS = {"full heat map (sigma)": "10 s", "full heat map (scale)": "30 s"}
 
 
 def run(code: str, src: Path | None) -> dict:
-    env = dict(os.environ)
-    if src is not None:
-        env["PYTHONPATH"] = str(src)
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "worker failed")
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return json.loads(run_variant(code, src)["stdout"].strip().splitlines()[-1])
 
 
 def main() -> None:

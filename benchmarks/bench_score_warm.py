@@ -26,14 +26,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _results import OUT, baseline_src, command_line, git, machine, write_section  # noqa: E402
+from _results import OUT, baseline_src, command_line, git, machine, run_variant, write_section  # noqa: E402
 
 NULL = ["cat0", "centaur0", "david0", "dog0", "horse0", "michael0", "victoria0", "wolf0"]
 STORE = OUT / "bench_score_warm.json"
@@ -81,20 +79,7 @@ def mesh(root: Path, name: str) -> Path:
 
 
 def run(code: str, cache: Path, src: Path | None) -> dict:
-    """``code`` in a fresh interpreter (``src`` first on the path for the baseline): wall, CPU, load, stdout."""
-    env = dict(os.environ, SHAPECOND_CACHE=str(cache))
-    if src is not None:
-        env["PYTHONPATH"] = str(src)
-    load = os.getloadavg()[0]
-    t = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-c", code + "\nimport resource\nru = resource.getrusage("
-                           "resource.RUSAGE_SELF)\nprint('__CPU__', ru.ru_utime + ru.ru_stime)"],
-                          capture_output=True, text=True, env=env)
-    wall = time.perf_counter() - t
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "child failed")
-    out, cpu = proc.stdout.rsplit("__CPU__", 1)
-    return dict(wall=wall, cpu=float(cpu), load=load, stdout=out)
+    return run_variant(code, src, cache)
 
 
 def score(path: Path, cache: Path, src: Path | None) -> dict:
