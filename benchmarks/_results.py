@@ -84,8 +84,9 @@ def baseline_src(rev: str) -> tuple[str, Path]:
 
 def run_variant(code: str, src: Path | None = None, cache: Path | None = None) -> dict:
     """Python ``code`` in a fresh interpreter, with ``src`` first on the path (a ``baseline_src``; None:
-    the working tree) and ``SHAPECOND_CACHE=cache`` if given: wall, CPU (the process and its children:
-    worker processes count), 1-minute load average before, stdout.  Raises on a non-zero exit."""
+    the working tree) and ``SHAPECOND_CACHE=cache`` if given: wall, CPU (the process and the children it
+    waited for: not loky's reusable workers, which are not reaped), 1-minute load average before, stdout.
+    Raises on a non-zero exit."""
     env = dict(os.environ)
     if cache is not None:
         env["SHAPECOND_CACHE"] = str(cache)

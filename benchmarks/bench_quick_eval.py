@@ -1,0 +1,70 @@
+"""``shapecond evaluate DATASET --quick`` from an empty cache and warm, against an earlier commit in one run.
+
+Usage: ``python benchmarks/bench_quick_eval.py DATASET_DIR [--baseline REV] [--jobs 2]``
+
+DATASET_DIR is a TOSCA folder such as ../shared/data/tosca_hires.  *baseline* is the package at git
+revision ``--baseline`` (default: the merge base of HEAD and ``main``), extracted under benchmarks/out/;
+*ours* is the working tree.  Each run is a fresh process of the command line (``--quick``: wolf and
+centaur, 2 targets each, N = 200, every landmark method and both matchers) with its own cache folder:
+empty for the cold run, then the same folder again for the warm one.  Before both, each variant runs a
+tiny score so that its numba kernels are compiled (or loaded) outside the timings.  Wall time only:
+the work runs in loky's worker processes.  Writes the section ``quick-eval`` of benchmarks/RESULTS.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+from _results import baseline_src, command_line, git, machine, run_variant, write_section  # noqa: E402
+
+CLI = """
+import sys
+from shapecond.cli import main
+sys.argv = ['shapecond']
+try:
+    main({args!r})
+except SystemExit as e:
+    if e.code not in (0, None):
+        raise
+"""
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("dataset", type=Path)
+    ap.add_argument("--baseline", default=None)
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args()
+    sha, src = baseline_src(a.baseline or git("merge-base", "HEAD", "main"))
+    rows = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for which, path in (("baseline", src), ("ours", None)):
+            cache, out = Path(tmp) / f"cache-{which}", Path(tmp) / f"out-{which}"
+            run_variant(CLI.format(args=["score", "demo:animal", "--points", "24", "--json"]), path,
+                        Path(tmp) / "warm-up")
+            args = ["evaluate", str(a.dataset), "--quick", "--jobs", str(a.jobs), "--out", str(out)]
+            for run in ("cold", "warm"):
+                rows[(which, run)] = run_variant(CLI.format(args=args), path, cache)
+                print(which, run, f"{rows[(which, run)]['wall']:.1f} s", flush=True)
+    lines = ["## `shapecond evaluate --quick` (bench_quick_eval.py)", "",
+             f"Machine: {machine()}. Command: `{command_line()}`. Baseline = the package at {sha[:10]}, ours = "
+             f"this tree, in the same run; each figure one fresh process (`--quick`: wolf and centaur, 2 targets "
+             f"each, N = 200, every landmark method, LH05 and FAQ, `--jobs {a.jobs}`), cold = empty cache, warm = "
+             "the same cache again. Wall time only (the work is in loky's worker processes, whose CPU time the parent "
+             "cannot see). Target (issue 16): cold ≤ 30 s.", "",
+             "| variant | cold wall s | warm wall s | load before (cold / warm) |", "|---|---|---|---|"]
+    for which in ("baseline", "ours"):
+        c, w = rows[(which, "cold")], rows[(which, "warm")]
+        lines.append(f"| {which} | {c['wall']:.1f} | {w['wall']:.1f} | "
+                     f"{c['load']:.2f} / {w['load']:.2f} |")
+    text = "\n".join(lines)
+    print(text)
+    write_section("quick-eval", text)
+
+
+if __name__ == "__main__":
+    main()
