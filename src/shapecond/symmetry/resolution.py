@@ -49,10 +49,10 @@ from shapecond.jsonable import jsonable
 from shapecond.limits import one_blas_thread, search_seconds
 from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.search import (DENSE_K, EFFORTS, RUN_CHUNK, MapPool, SearchResult, SearchStage, _prepare,
+from shapecond.symmetry.search import (DENSE_K, EFFORTS, MapPool, SearchResult, SearchStage, _prepare,
                                       best_reassignment, witness_search)
 from shapecond.symmetry.starts import reflection_starts
-from shapecond.threads import thread_map
+from shapecond.threads import n_threads, thread_map
 
 CONVERGED_RTOL = 0.10
 #: ``two_levels``: dense searches estimated to take at least this long run in two levels.
@@ -133,8 +133,9 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
         first.setdefault(t.tobytes(), t)
     maps = list(first.values())
     with one_blas_thread():
-        for i in range(0, len(maps), RUN_CHUNK):
-            chunk = maps[i:i + RUN_CHUNK]
+        k = n_threads()
+        for i in range(0, len(maps), k):
+            chunk = maps[i:i + k]
             # polished in parallel threads, taken in order: the pool of a serial loop
             done = thread_map(lambda t: stage.polish(t, mode=mode, s=s, anchors=lm), chunk)
             for t, u in zip(chunk, done):

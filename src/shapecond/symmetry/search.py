@@ -19,7 +19,7 @@ best maps).  With dense targets all of this runs on the bijections of X first
 (G is N × N, cheap) and the best few maps are then refined over Y.
 
 The starts of a phase are independent: they are polished by parallel threads
-(``shapecond.threads``, ``RUN_CHUNK`` at a time) and their results taken in order,
+(``shapecond.threads``, one per thread at a time) and their results taken in order,
 which gives the pool of polishing them one after the other, with any number of
 threads (the ladder and the kicks, each built from the results before it, stay
 serial).
@@ -45,7 +45,7 @@ from shapecond.symmetry import objective as obj
 from shapecond.symmetry import starts as S
 
 from shapecond.limits import one_blas_thread
-from shapecond.threads import thread_map
+from shapecond.threads import n_threads, thread_map
 
 #: Work per effort level: MDS coordinates / reflection starts kept, spectral vectors / sign pairs / starts polished,
 #: Gilmore-Lawler grid size / starts polished, ladder runs, random starts,
@@ -65,8 +65,6 @@ EFFORTS = {
 DENSE_K = 16
 #: How many distinct local optima a result keeps (warm starts for CNBS).
 KEEP = 5
-#: Starts polished at once by parallel threads (``threads``) between two looks at the time limit.
-RUN_CHUNK = 8
 
 
 @dataclass(frozen=True)
@@ -335,11 +333,11 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
     def run_all(stage, ts):
         """Polish every start of ``ts`` (parallel threads), adding the results in order until
         ``late()``: the same pool as polishing them one after the other (``threads``)."""
-        ts = list(ts)
-        for i in range(0, len(ts), RUN_CHUNK):
+        ts, k = list(ts), n_threads()  # one start per thread between two looks at ``late()``
+        for i in range(0, len(ts), k):
             if late():
                 return
-            done = thread_map(lambda t: stage.polish(t, mode=mode, s=s_obj, anchors=lm), ts[i:i + RUN_CHUNK])
+            done = thread_map(lambda t: stage.polish(t, mode=mode, s=s_obj, anchors=lm), ts[i:i + k])
             for t in done:
                 if late():
                     return
