@@ -186,3 +186,28 @@ def test_n12_n16_lower_over_exact_at_least_0_9_on_90_percent():
             ratios.append(1.0 if res.sigma == ex.sigma else res.sigma / ex.sigma)
         assert len(ratios) >= count - 1
         assert np.mean(np.array(ratios) >= 0.9) >= 0.9, (n, ratios)
+
+
+@pytest.mark.parametrize("budget", [None, 0.5])
+def test_the_same_result_with_one_thread_and_with_two(budget):
+    """The starts of a phase are polished in threads and taken in order (``threads``): the
+    pool, hence the witness and every kept map, is the one of a serial loop."""
+    import numba
+
+    from shapecond.symmetry.resolution import coarse_to_fine
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("numba has one thread on this machine")
+    D = dense_instance(np.random.default_rng(5), 40, 320, 3)
+    b = None if budget is None else budget * obj.dist2(D, np.roll(np.arange(40), 1))
+    out = []
+    before = numba.get_num_threads()
+    try:
+        for k in (1, 2):
+            numba.set_num_threads(k)
+            r = witness_search(D, 40, landmarks=[2], seed=3, budget=b)
+            fine, coarse = coarse_to_fine(D, 40, seed=3, budget=b)
+            out.append([m.tobytes() for res in (r, fine, coarse) for m in res.maps] + [r.sigma, fine.sigma])
+    finally:
+        numba.set_num_threads(before)
+    assert out[0] == out[1]
