@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from _results import command_line, machine, run_isolated, write_section  # noqa: E402
+from _results import command_line, machine, run_isolated, run_variant, write_section  # noqa: E402
 
 NULL = ["cat0", "centaur0", "david0", "dog0", "horse0", "michael0", "victoria0", "wolf0"]
 STORE = Path(__file__).parent / "out" / "bench_geodesics.json"
@@ -171,19 +171,9 @@ print("__OUT__" + json.dumps(dict(imports=t1 - t0, load=t2 - t1, score=t3 - t2, 
 def cli_run(path: Path, cache: Path, prefix: str = "") -> dict:
     code = prefix + ("import json, resource, sys\nfrom shapecond.cli import main\nsys.argv = ['shapecond']\n"
                      f"try:\n    main(['score', {str(path)!r}, '--json'])\nexcept SystemExit:\n    pass\n")
-    env = dict(os.environ, SHAPECOND_CACHE=str(cache))
-    load = os.getloadavg()[0]
-    t = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-c", code + "\nimport resource\n"
-                           "ru = resource.getrusage(resource.RUSAGE_SELF)\n"
-                           "print('__CPU__', ru.ru_utime + ru.ru_stime)"],
-                          capture_output=True, text=True, env=env)
-    wall = time.perf_counter() - t
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr.strip().splitlines()[-1])
-    report = json.loads(proc.stdout.split("__CPU__")[0])
-    return dict(wall=wall, cpu=float(proc.stdout.rsplit("__CPU__", 1)[1]), load=load,
-                sigma=report["sigma"]["lower"], flag=report["resolution"]["flag"])
+    r = run_variant(code, None, cache)
+    report = json.loads(r.pop("stdout"))
+    return dict(r, sigma=report["sigma"]["lower"], flag=report["resolution"]["flag"])
 
 
 def stage_score(root, store, name="cat0"):
