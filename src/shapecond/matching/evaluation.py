@@ -397,8 +397,9 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
 
     Phases: the null shapes' geodesics; then the targets' geodesics together
     with the landmark selections (they depend only on the null shapes); then
-    the matchings together with the δ scores at each class's own deformation
-    level (``class_epsilon``; corresponding protocol only).
+    the matchings together with each class's own deformation level and the δ
+    scores at it (``class_scale_task``; corresponding protocol only).  Within a
+    phase the longest tasks go first.
     """
     if protocol not in PROTOCOLS + ("both",):
         raise InputError(f"unknown protocol {protocol!r} (corresponding, independent or both)")
@@ -442,11 +443,15 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
     landmarks.sort(key=lambda d: order[(d["cls"], d["method"])])  # class by class, whatever finished first
     timing["landmarks and targets"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    eps = {}
+    # each class's deformation level and the δ scores at it, as tasks beside the matchings
+    # (the level reads every target's rows: seconds per class, which the parent would
+    # otherwise spend alone while the workers wait)
+    match_tasks = []
     if "corresponding" in protocols:
-        eps = {cls: class_epsilon(null, targets, *common) for cls, (null, targets, _) in plan.items()}
-    match_tasks = [(scale_task, (d["cls"], plan[d["cls"]][0], d["method"], d["vertices"], sorted(d["scale"]),
-                                 eps[d["cls"]], *common), {}) for d in landmarks if d["cls"] in eps]
+        match_tasks = [(class_scale_task, (cls, null, targets,
+                                           {d["method"]: (d["vertices"], sorted(d["scale"]))
+                                            for d in landmarks if d["cls"] == cls}, *common), {})
+                       for cls, (null, targets, _) in plan.items()]
     for cls, (null, targets, k) in plan.items():
         sets = {d["method"]: d["vertices"] for d in landmarks if d["cls"] == cls}
         sets = {m: sets[m] for m in methods}
@@ -455,12 +460,15 @@ def evaluate_dataset(dataset_dir, classes=None, methods=("fps", "pls", "hks", "c
             for prot in protocols:
                 match_tasks.append((target_task, (cls, null, tp, sets, counts, tuple(matchers), *common),
                                     dict(protocol=prot)))
-    records, by_set = [], {(d["cls"], d["method"]): d for d in landmarks}
+    records, by_set, eps = [], {(d["cls"], d["method"]): d for d in landmarks}, {}
     for res in run_tasks(match_tasks, n_jobs, scheduler, progress):
-        if isinstance(res, dict):  # a scale_task
-            by_set[(res["cls"], res["method"])]["scale_class"] = res["scale_class"]
+        if isinstance(res, dict):  # a class_scale_task
+            eps[res["cls"]] = res["epsilon"]
+            for method, sc in res["scale_class"].items():
+                by_set[(res["cls"], method)]["scale_class"] = sc
         else:
             records += res
+    eps = {cls: eps[cls] for cls in plan if cls in eps}
     timing["matching"] = time.perf_counter() - t0
     settings = dict(dataset=str(dataset_dir), classes=list(plan), methods=list(methods),
                     protocols=list(protocols),
@@ -489,17 +497,22 @@ def class_epsilon(null_path, targets, n_points, seed, backend, cache) -> float:
     return float(np.median(rms)) * null.unit / scale
 
 
-def scale_task(cls, null_path, method, vertices, counts, epsilon, n_points, seed, backend, cache) -> dict:
-    """δ(ε) (quick search) of one landmark set after each count, at the distortion level ``epsilon``
-    (``class_epsilon``); non-increasing in the count (``landmarks.monotone``)."""
+def class_scale_task(cls, null_path, targets, sets, n_points, seed, backend, cache) -> dict:
+    """A class's deformation level ε (``class_epsilon``) and, at it, δ(ε) (quick search) of each
+    landmark set ``sets[method] = (vertices, counts)`` after each count, non-increasing in the count
+    (``landmarks.monotone``)."""
     from shapecond.landmarks import monotone
     from shapecond.shapes.io import load_geometry
     from shapecond.shapes.metric import metric_shape
     from shapecond.symmetry.scale import scale_score
 
+    epsilon = class_epsilon(null_path, targets, n_points, seed, backend, cache)
     shape = metric_shape(load_geometry(null_path), n_points, backend=backend, seed=seed, cache=cache)
     where = {int(v): i for i, v in enumerate(shape.samples[:shape.n_samples])}
-    idx = [where[int(v)] for v in vertices]
-    vals = [scale_score(shape.D, shape.n_samples, idx[:c], epsilon, seed=seed, effort="quick").displacement
-            for c in counts]
-    return dict(cls=cls, method=method, scale_class=dict(zip(counts, monotone(vals))))
+    out = {}
+    for method, (vertices, counts) in sets.items():
+        idx = [where[int(v)] for v in vertices]
+        vals = [scale_score(shape.D, shape.n_samples, idx[:c], epsilon, seed=seed, effort="quick").displacement
+                for c in counts]
+        out[method] = dict(zip(counts, monotone(vals)))
+    return dict(cls=cls, epsilon=epsilon, scale_class=out)
