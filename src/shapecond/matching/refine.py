@@ -172,11 +172,25 @@ def support_lists(D_source, cut2: float) -> np.ndarray:
     (``D² < cut2``), increasing, padded with -1."""
     D = np.asarray(D_source)
     within = (D * D < cut2) & ~np.eye(D.shape[0], dtype=bool)
-    near = np.full((D.shape[0], max(int(within.sum(axis=1).max(initial=0)), 1)), -1, dtype=np.int64)
-    for x, row in enumerate(within):
-        idx = np.flatnonzero(row)
-        near[x, :idx.size] = idx
+    counts = within.sum(axis=1)
+    near = np.full((D.shape[0], max(int(counts.max(initial=0)), 1)), -1, dtype=np.int64)
+    rows, cols = np.nonzero(within)  # row by row, columns increasing
+    near[rows, np.arange(rows.size) - np.repeat(np.cumsum(counts) - counts, counts)] = cols
     return near
+
+
+@numba.njit(cache=True, nogil=True)
+def _objective_near(Ds, Dt, t, near, t0, r2, ir2, cut2):
+    """``_objective`` summed over the pairs within the kernel's support (``support_lists``):
+    its non-zero terms in its order, so the same value."""
+    s = 0.0
+    for x in range(Ds.shape[0]):
+        for q in range(near.shape[1]):
+            xp = near[x, q]
+            if xp < 0:
+                break
+            s += _k(Ds[x, xp], Dt[t[x], t[xp]], t0, r2, ir2, cut2)
+    return s
 
 
 def rank_table(knn: np.ndarray) -> np.ndarray:
@@ -188,7 +202,50 @@ def rank_table(knn: np.ndarray) -> np.ndarray:
     return rank
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
+def _support_terms(Ds, near, t0, r2, ir2):
+    """The parts of ``K(D_s[b, x'], ·)`` that depend on the source only, over ``near[b]``.
+
+    Returns ``(count, d, den, w)``: ``count[b]`` entries of ``near[b]``, their
+    distances ``d``, the denominators ``4 τ(d)²`` of the disagreement and the
+    locality weights ``w(d)`` of the module docstring (the factors of ``_k``).
+    """
+    n, width = near.shape
+    count = np.zeros(n, dtype=np.int64)
+    d = np.zeros((n, width))
+    den = np.ones((n, width))
+    w = np.zeros((n, width))
+    for b in range(n):
+        q = 0
+        while q < width and near[b, q] >= 0:
+            dv = Ds[b, near[b, q]]
+            d2 = dv * dv
+            d[b, q] = dv
+            den[b, q] = SUPPORT * SUPPORT * (t0 + r2 * d2)
+            w[b, q] = 1.0 - d2 * ir2
+            q += 1
+        count[b] = q
+    return count, d, den, w
+
+
+@numba.njit(cache=True, nogil=True)
+def _near_gain(Dt, t, near, count, d, den, w, b, y, buf):
+    """Q[b, y] as ``_gain_near`` sums it (the same terms in the same order), with the
+    source factors from ``_support_terms`` and the terms evaluated branch-free."""
+    c = count[b]
+    for q in range(c):
+        buf[q] = Dt[y, t[near[b, q]]]
+    for q in range(c):
+        diff = d[b, q] - buf[q]
+        u = max(1.0 - diff * diff / den[b, q], 0.0)
+        buf[q] = u * u * w[b, q] * w[b, q]
+    s = 0.0
+    for q in range(c):
+        s += buf[q]
+    return s
+
+
+@numba.njit(cache=True, nogil=True)
 def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_moves):
     """Best-improvement swaps of neighbouring images; ``t`` updated in place.
 
@@ -196,6 +253,14 @@ def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_move
     ``B[x] = (T x, knn[T x])`` with gains ``Qb[x, j] = Q[x, B[x, j]]``.  The gain
     of b at T a is read from b's band at ``rank[T b, T a]`` (``rank_table``), or
     summed over ``near[b]`` (``support_lists``) when T a is not in it.
+
+    Each sample ``a`` keeps its best swap (largest gain, first in band order);
+    after a move only the samples whose gains can have changed are rescanned:
+    those within the kernel's support of the two moved samples (``S``: their
+    band gains changed) and those with a swap partner in ``S``.  A gain summed
+    over ``near[b]`` is kept with the version of ``b``'s neighbourhood.  The
+    move chosen is the first of the largest gain in ``(a, band)`` order, as a
+    full scan would choose it.
     """
     n = Ds.shape[0]
     m = Dt.shape[0]
@@ -208,12 +273,22 @@ def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_move
     inv = np.full(m, -1, dtype=np.int64)
     for x in range(n):
         inv[t[x]] = x
+    count, nd, nden, nw = _support_terms(Ds, near, t0, r2, ir2)
+    buf = np.empty(near.shape[1])
+    version = np.zeros(n, dtype=np.int64)  # bumped when T changes within near[b]
+    cache = np.zeros((n, kb))  # Q[b, T a] of a pair (a, j) summed over near[b] ...
+    cache_key = np.full((n, kb, 3), -1, dtype=np.int64)  # ... for this (b, T a, version[b])
+    best_gain = np.full(n, -np.inf)
+    best_j = np.zeros(n, dtype=np.int64)
+    dirty = np.ones(n, dtype=np.bool_)
+    in_s = np.zeros(n, dtype=np.bool_)
     moves = 0
     while moves < max_moves:
-        best = 1e-12
-        ba = -1
-        bb = -1
         for a in range(n):
+            if not dirty[a]:
+                continue
+            dirty[a] = False
+            best_gain[a] = -np.inf
             if not isfree[a]:
                 continue
             ta = t[a]
@@ -225,18 +300,35 @@ def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_move
                 dab = Ds[a, b]
                 # ΔF / 2 of exchanging T a and T b (module docstring)
                 rb = rank[tb, ta]
-                qba = Qb[b, rb] if rb > 0 else _gain_near(Ds, Dt, t, near, b, ta, t0, r2, ir2, cut2)
+                if rb > 0:
+                    qba = Qb[b, rb]
+                elif cache_key[a, j, 0] == b and cache_key[a, j, 1] == ta and \
+                        cache_key[a, j, 2] == version[b]:
+                    qba = cache[a, j]
+                else:
+                    qba = _near_gain(Dt, t, near, count, nd, nden, nw, b, ta, buf)
+                    cache[a, j] = qba
+                    cache_key[a, j, 0] = b
+                    cache_key[a, j, 1] = ta
+                    cache_key[a, j, 2] = version[b]
                 gain = (Qb[a, j] - Qb[a, 0] + qba - Qb[b, 0]
                         - 2.0 * _k(dab, 0.0, t0, r2, ir2, cut2)
                         + 2.0 * _k(dab, Dt[ta, tb], t0, r2, ir2, cut2))
-                if gain > best:
-                    best = gain
-                    ba = a
-                    bb = b
+                if gain > best_gain[a]:
+                    best_gain[a] = gain
+                    best_j[a] = j
+        best = 1e-12
+        ba = -1
+        for a in range(n):
+            if best_gain[a] > best:
+                best = best_gain[a]
+                ba = a
         if ba < 0:
             break
+        bb = inv[B[ba, best_j[ba]]]
         ta = t[ba]
         tb = t[bb]
+        in_s[:] = False
         for x in range(n):
             if x == ba or x == bb:
                 continue
@@ -244,6 +336,7 @@ def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_move
             db = Ds[x, bb]
             if da * da > cut2 and db * db > cut2:
                 continue
+            in_s[x] = True
             for j in range(kb):
                 y = B[x, j]
                 Qb[x, j] += (_k(da, Dt[y, tb], t0, r2, ir2, cut2) - _k(da, Dt[y, ta], t0, r2, ir2, cut2)
@@ -253,10 +346,21 @@ def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_move
         inv[tb] = ba
         inv[ta] = bb
         for x in (ba, bb):
+            in_s[x] = True
             B[x, 0] = t[x]
             B[x, 1:] = knn[t[x]]
             _gain_row(Ds, Dt, t, x, B[x], Qb[x], t0, r2, ir2, cut2)
         moves += 1
+        for x in range(n):
+            if in_s[x]:
+                version[x] += 1
+                dirty[x] = True
+                continue
+            for j in range(1, kb):
+                b = inv[B[x, j]]
+                if b >= 0 and in_s[b]:
+                    dirty[x] = True
+                    break
     return moves
 
 
@@ -349,31 +453,62 @@ def polish(D_source, D_target, t, free, kernel: Kernel, knn=None, k: int = 16,
     isfree[free] = True
     knn = neighbours(Dt, k) if knn is None else np.ascontiguousarray(knn[:, :k], dtype=np.int64)
     rank, near = rank_table(knn), support_lists(Ds, p[3])
-    f = _objective(Ds, Dt, t, *p)
+    f = _objective_near(Ds, Dt, t, near, *p)
     for _ in range(max_rounds):
         _swap_search(Ds, Dt, t, knn, rank, near, isfree, *p, 50 * Ds.shape[0])
-        f = _objective(Ds, Dt, t, *p)
+        f = _objective_near(Ds, Dt, t, near, *p)
         t2 = _reassign(Ds, Dt, t, free, p)
-        f2 = _objective(Ds, Dt, t2, *p)
+        f2 = _objective_near(Ds, Dt, t2, near, *p)
         if not f2 > f * (1 + 1e-12):
             break
         t, f = t2, f2
     return t, float(f)
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, nogil=True)
+def _select(buf, rank):
+    """The ``rank``-th smallest entry of ``buf`` (0-based; Hoare's selection, in place).
+
+    The value ``np.partition(buf, rank)[rank]`` returns, without its copy."""
+    lo = 0
+    hi = buf.size - 1
+    while lo < hi:
+        pivot = buf[rank]
+        i = lo
+        j = hi
+        while i <= j:
+            while buf[i] < pivot:
+                i += 1
+            while pivot < buf[j]:
+                j -= 1
+            if i <= j:
+                buf[i], buf[j] = buf[j], buf[i]
+                i += 1
+                j -= 1
+        if j < rank:
+            lo = i
+        if rank < i:
+            hi = j
+    return buf[rank]
+
+
+@numba.njit(cache=True, parallel=True, nogil=True)
 def _quantile_cost(Ds, Dt, t, rows, band, anchors, rank):
     """C[i, j] = the rank-th smallest |D_s[x, a] − D_t[y, T a]| over the anchors, x = rows[i], y = band[i, j]."""
     C = np.empty(band.shape)
+    na = anchors.size
+    ta = t[anchors]
     for i in numba.prange(rows.size):
         x = rows[i]
-        buf = np.empty(anchors.size)
+        ds = np.empty(na)
+        for q in range(na):
+            ds[q] = Ds[x, anchors[q]]
+        buf = np.empty(na)
         for j in range(band.shape[1]):
             y = band[i, j]
-            for q in range(anchors.size):
-                a = anchors[q]
-                buf[q] = abs(Ds[x, a] - Dt[y, t[a]])
-            C[i, j] = np.partition(buf, rank)[rank]
+            for q in range(na):
+                buf[q] = abs(ds[q] - Dt[y, ta[q]])
+            C[i, j] = _select(buf, rank)
     return C
 
 
