@@ -119,61 +119,39 @@ def _affinity_kernel(M, Ds, Dt, src, tgt, t0, r2, iw2, cut2):
     return M
 
 
-@numba.njit(cache=True, parallel=True)
-def _sparse_affinity_kernel(Ds, Dt, src, tgt, order, starts, near, t0, r2, iw2, cut2):
-    """CSR pattern and values of M for a kernel of finite support, in one pass.
+@numba.njit(cache=True, nogil=True)
+def _sparse_affinity_kernel(indices, data, Ds, Dt, src, tgt, order, starts, near, t0, r2, iw2, cut2):
+    """CSR pattern and values of M for a kernel of finite support, in one pass; returns indptr.
 
     ``order[starts[x]:starts[x + 1]]`` lists the candidates of source sample ``x``;
     ``near[x]`` the other source samples within the kernel's support (-1 padded).
     Row ``i`` (candidate ``x -> y``) holds, for each ``x2`` of ``near[x]`` in turn and
     each candidate ``j`` of ``x2`` with another target, ``K(D_s[x, x2], D_t[y, tgt[j]])``
-    when positive.  Rows are written (branch-free) into slots of their upper bound
-    (the candidates of the neighbours), sources in parallel, then packed.
+    when positive.  Rows are written (branch-free) one after the other into
+    ``indices`` and ``data``, which hold at least the total of the rows' upper bounds
+    (the candidates of the neighbours).
     """
     C = src.size
-    cnt = starts[1:] - starts[:-1]
-    off = np.zeros(C + 1, dtype=np.int64)
+    indptr = np.zeros(C + 1, dtype=np.int64)
+    p = 0
     for i in range(C):
-        s = 0
+        x = src[i]
+        y = tgt[i]
         for q in range(near.shape[1]):
-            x2 = near[src[i], q]
+            x2 = near[x, q]
             if x2 < 0:
                 break
-            s += cnt[x2]
-        off[i + 1] = off[i] + s
-    cols = np.empty(off[-1], dtype=np.int32)
-    vals = np.empty(off[-1], dtype=np.float32)
-    nnz = np.zeros(C, dtype=np.int64)
-    for x in numba.prange(starts.size - 1):
-        for qq in range(starts[x], starts[x + 1]):
-            i = order[qq]
-            y = tgt[i]
-            p = off[i]
-            for q in range(near.shape[1]):
-                x2 = near[x, q]
-                if x2 < 0:
-                    break
-                d = Ds[x, x2]
-                for r in range(starts[x2], starts[x2 + 1]):
-                    j = order[r]
-                    y2 = tgt[j]
-                    if y2 != y:
-                        v = R._k(d, Dt[y, y2], t0, r2, iw2, cut2)
-                        cols[p] = j
-                        vals[p] = v
-                        p += 1 if v > 0.0 else 0
-            nnz[i] = p - off[i]
-    indptr = np.zeros(C + 1, dtype=np.int64)
-    for i in range(C):
-        indptr[i + 1] = indptr[i] + nnz[i]
-    indices = np.empty(indptr[-1], dtype=np.int32)
-    data = np.empty(indptr[-1], dtype=np.float32)
-    for i in numba.prange(C):
-        a, b = off[i], indptr[i]
-        for q in range(nnz[i]):
-            indices[b + q] = cols[a + q]
-            data[b + q] = vals[a + q]
-    return indptr, indices, data
+            d = Ds[x, x2]
+            for r in range(starts[x2], starts[x2 + 1]):
+                j = order[r]
+                y2 = tgt[j]
+                if y2 != y:
+                    v = R._k(d, Dt[y, y2], t0, r2, iw2, cut2)
+                    indices[p] = j
+                    data[p] = v
+                    p += 1 if v > 0.0 else 0
+        indptr[i + 1] = p
+    return indptr
 
 
 def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 512,
@@ -197,10 +175,15 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
         starts = np.searchsorted(src[order], np.arange(Ds.shape[0] + 1))
         t0, r2, iw2, cut2 = kernel.params()
         near = R.support_lists(Ds, cut2)
-        indptr, indices, data = _sparse_affinity_kernel(
-            Ds, np.ascontiguousarray(D_target, dtype=np.float64), src, tgt, order, starts, near,
-            t0, r2, iw2, cut2)
-        return sp.csr_matrix((data, indices, indptr), shape=(C, C))
+        # room for every row's upper bound, allocated by NumPy (huge pages: few page faults)
+        counts = np.diff(starts)
+        bound = int(np.where(near >= 0, counts[np.maximum(near, 0)], 0).sum(axis=1)[src].sum())
+        indices = np.empty(bound, dtype=np.int32)
+        data = np.empty(bound, dtype=np.float32)
+        indptr = _sparse_affinity_kernel(
+            indices, data, Ds, np.ascontiguousarray(D_target, dtype=np.float64), src, tgt, order,
+            starts, near, t0, r2, iw2, cut2)
+        return sp.csr_matrix((data[:indptr[-1]], indices[:indptr[-1]], indptr), shape=(C, C))
     if 4 * C * C > MAX_AFFINITY_BYTES:
         raise TooLargeError(
             f"{C} candidates need a {4 * C * C / 2**30:.1f} GB affinity matrix; lower k or N")
