@@ -81,6 +81,52 @@ def test_polish_never_lowers_the_objective_and_ends_at_a_swap_optimum(seed, kern
                 assert _F(Ds, Dt, s, kernel) <= f + 1e-9
 
 
+def _brute_force_swaps(Ds, Dt, t, knn, free, kernel, max_moves):
+    """Best-improvement neighbour swaps, every gain from the objective (tested against its
+    definition above) of the swapped map."""
+    t = t.copy()
+    inv = np.argsort(t)
+    for move in range(max_moves):
+        f = R.objective(Ds, Dt, t, kernel)
+        best, pair = 1e-9, None
+        for a in free:
+            for y in knn[t[a]]:
+                b = inv[y]
+                if b != a and b in free:
+                    s = t.copy()
+                    s[a], s[b] = s[b], s[a]
+                    gain = R.objective(Ds, Dt, s, kernel) - f
+                    if gain > best:
+                        best, pair = gain, (a, b)
+        if pair is None:
+            return t, move
+        a, b = pair
+        t[a], t[b] = t[b], t[a]
+        inv[t[a]], inv[t[b]] = a, b
+    return t, max_moves
+
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(KERNELS + [R.Kernel(0.1, 0.0, 0.15)]))
+def test_swap_search_makes_the_moves_of_a_full_rescan(seed, kernel):
+    # the swap search rescans only the samples a move can affect: the same moves as
+    # recomputing every gain (short bands: some gains summed outside them; a kernel
+    # of small support: moves leave most samples' gains alone)
+    n, k = 40, 3
+    Ds, Dt, _ = _instance(n, seed, noise=0.05)
+    t0 = np.random.default_rng(seed).permutation(n)
+    free = np.setdiff1d(np.arange(n), [5])
+    isfree = np.isin(np.arange(n), free)
+    knn = R.neighbours(Dt, k)
+    p = kernel.params()
+    for max_moves in (3, 50 * n):
+        want, moves = _brute_force_swaps(Ds, Dt, t0, knn, set(free.tolist()), kernel, max_moves)
+        t = t0.astype(np.int64)
+        got = R._swap_search(Ds, Dt, t, knn, R.rank_table(knn), R.support_lists(Ds, p[3]), isfree,
+                             *p, max_moves)
+        assert got == moves and np.array_equal(t, want)
+
+
 def test_robust_reassignment_keeps_a_permutation_and_recovers_a_shifted_region():
     Ds, Dt, truth = _instance(60, 3)
     t = truth.copy()
