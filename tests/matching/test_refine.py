@@ -180,7 +180,9 @@ def test_compiled_gain_tables_equal_the_gain_entries(seed, kernel):
     assert np.array_equal(cols, band)
     assert np.allclose(band, entries, rtol=1e-12, atol=1e-15)
     near = R.support_lists(Ds, p[3])
-    assert np.array_equal([[R._gain_near(Ds, Dt, t, near, x, y, *p) for y in img] for x in rows], entries)
+    terms, buf = R._support_terms(Ds, near, *p[:3]), np.empty(near.shape[1])
+    assert np.array_equal([[R._gain_near(Dt, t, near, *terms, x, y, buf) for y in img] for x in rows],
+                          entries)
 
 
 def test_rank_table_finds_the_first_position_in_each_neighbour_list():
