@@ -105,9 +105,9 @@ def default_sigma(D_source: np.ndarray, factor: float = 1.0) -> float:
 
 
 @numba.njit(parallel=True, cache=True)
-def _affinity_kernel(M, Ds, Dt, src, tgt, t0, r2, iw2, cut2):
-    """Fill the (C, C) ``M`` with the dense affinity (``affinity_matrix``)."""
+def _affinity_kernel(Ds, Dt, src, tgt, t0, r2, iw2, cut2):
     C = src.size
+    M = np.empty((C, C), dtype=np.float32)
     for i in numba.prange(C):
         x, y = src[i], tgt[i]
         for j in range(C):
@@ -191,8 +191,8 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
     Dt = np.ascontiguousarray(D_target, dtype=np.float64)
     src, tgt = np.ascontiguousarray(cand.source), np.ascontiguousarray(cand.target)
     t0, r2, iw2, cut2 = kernel.params()
-    if compiled:  # allocated by NumPy, which asks the kernel for huge pages (fewer page faults)
-        return _affinity_kernel(np.empty((C, C), dtype=np.float32), Ds, Dt, src, tgt, t0, r2, iw2, cut2)
+    if compiled:
+        return _affinity_kernel(Ds, Dt, src, tgt, t0, r2, iw2, cut2)
     M = np.empty((C, C), dtype=np.float32)
     for lo in range(0, C, block):
         hi = min(C, lo + block)
