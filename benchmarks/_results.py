@@ -53,13 +53,8 @@ def command_line() -> str:
 
 def run_isolated(code: str, timeout: float = 3600) -> tuple[str, float]:
     """Run Python ``code`` in a fresh interpreter; return (stdout, its peak RSS in MB)."""
-    proc = subprocess.run([sys.executable, "-c", code + "\nimport resource,sys;"
-                           "print('__RSS__', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)"],
-                          capture_output=True, text=True, timeout=timeout)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "failed")
-    out, rss = proc.stdout.rsplit("__RSS__", 1)
-    return out.strip(), float(rss)
+    r = run_variant(code, timeout=timeout)
+    return r["stdout"].strip(), r["rss"]
 
 
 def git(*args: str) -> str:
@@ -82,11 +77,11 @@ def baseline_src(rev: str) -> tuple[str, Path]:
     return sha, dest / "src"
 
 
-def run_variant(code: str, src: Path | None = None, cache: Path | None = None) -> dict:
+def run_variant(code: str, src: Path | None = None, cache: Path | None = None, timeout: float | None = None) -> dict:
     """Python ``code`` in a fresh interpreter, with ``src`` first on the path (a ``baseline_src``; None:
     the working tree) and ``SHAPECOND_CACHE=cache`` if given: wall, CPU (the process and the children it
-    waited for: not loky's reusable workers, which are not reaped), 1-minute load average before, stdout.
-    Raises on a non-zero exit."""
+    waited for: not loky's reusable workers, which are not reaped), its peak RSS in MB, the 1-minute load
+    average before, stdout.  Raises on a non-zero exit."""
     env = dict(os.environ)
     if cache is not None:
         env["SHAPECOND_CACHE"] = str(cache)
@@ -96,10 +91,12 @@ def run_variant(code: str, src: Path | None = None, cache: Path | None = None) -
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-c", code + "\nimport resource\nru, rc = resource.getrusage("
                            "resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)\n"
-                           "print('__CPU__', ru.ru_utime + ru.ru_stime + rc.ru_utime + rc.ru_stime)"],
-                          capture_output=True, text=True, env=env)
+                           "print('__CPU__', ru.ru_utime + ru.ru_stime + rc.ru_utime + rc.ru_stime, "
+                           "ru.ru_maxrss / 1024)"],
+                          capture_output=True, text=True, env=env, timeout=timeout)
     wall = time.perf_counter() - t
     if proc.returncode != 0:
         raise RuntimeError(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "child failed")
-    out, cpu = proc.stdout.rsplit("__CPU__", 1)
-    return dict(wall=wall, cpu=float(cpu), load=load, stdout=out)
+    out, tail = proc.stdout.rsplit("__CPU__", 1)
+    cpu, rss = tail.split()
+    return dict(wall=wall, cpu=float(cpu), rss=float(rss), load=load, stdout=out)

@@ -83,16 +83,20 @@ def _swap_cols(A, a, b):
 
 
 @njit(cache=True, nogil=True)
+def _entries(D, t, P, a, b):
+    """(R[a, b], Q[a, b]) from their definitions (``local_search``'s Notes)."""
+    u = D[a, t[b]]
+    w = D[b, t[a]]
+    return P[a, b] + P[b, a] + 2.0 * D[a, b] * D[t[a], t[b]], u * u + w * w
+
+
+@njit(cache=True, nogil=True)
 def _pair_row(D, n, t, P, R, Q, a):
     """Row and column ``a`` of the scan tables R and Q from P and the map t."""
-    ta = t[a]
     for x in range(n):
-        r = P[a, x] + P[x, a] + 2.0 * D[a, x] * D[ta, t[x]]
+        r, q = _entries(D, t, P, a, x)
         R[a, x] = r
         R[x, a] = r
-        u = D[a, t[x]]
-        w = D[x, ta]
-        q = u * u + w * w
         Q[a, x] = q
         Q[x, a] = q
 
@@ -111,12 +115,8 @@ def _setup(D, n, t, G, knn):
         for q in range(k):
             Gk[x, q] = G[x, knn[t[x], q]]
     for a in range(n):
-        ta = t[a]
         for b in range(n):
-            R[a, b] = P[a, b] + P[b, a] + 2.0 * D[a, b] * D[ta, t[b]]
-            u = D[a, t[b]]
-            w = D[b, ta]
-            Q[a, b] = u * u + w * w
+            R[a, b], Q[a, b] = _entries(D, t, P, a, b)
     return P, R, Q, Gk
 
 

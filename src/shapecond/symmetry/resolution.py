@@ -52,7 +52,6 @@ from shapecond.symmetry import objective as obj
 from shapecond.symmetry.search import (DENSE_K, EFFORTS, MapPool, SearchResult, SearchStage, _prepare,
                                       best_reassignment, witness_search)
 from shapecond.symmetry.starts import reflection_starts
-from shapecond.threads import n_threads, thread_map
 
 CONVERGED_RTOL = 0.10
 #: ``two_levels``: dense searches estimated to take at least this long run in two levels.
@@ -133,17 +132,12 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
         first.setdefault(t.tobytes(), t)
     maps = list(first.values())
     with one_blas_thread():
-        k = n_threads()
-        for i in range(0, len(maps), k):
-            chunk = maps[i:i + k]
-            # polished in parallel threads, taken in order: the pool of a serial loop
-            done = thread_map(lambda t: stage.polish(t, mode=mode, s=s, anchors=lm), chunk)
-            for t, u in zip(chunk, done):
-                if t.tobytes() in pool.items:  # polished already (the witness is also the first map)
-                    continue
-                pool.add(t)
-                if pool.best_value() < math.inf:
-                    pool.add(u)
+        for t, u in stage.polished(maps, mode, s, lm):  # parallel threads, taken in order
+            if t.tobytes() in pool.items:  # polished already (the witness is also the first map)
+                continue
+            pool.add(t)
+            if pool.best_value() < math.inf:
+                pool.add(u)
     return pool.result(time.perf_counter() - t0)
 
 

@@ -203,6 +203,16 @@ class SearchStage:
                        lrows, obj.anchor_rows(D, t, lrows), float(s) / n)
         return t
 
+    def polished(self, ts, mode=K.MODE_RATIO, s=0.0, anchors=()):
+        """Yield ``(t, polish(t))`` for each start of ``ts`` in order, polished ``n_threads()`` at a
+        time by parallel threads (``shapecond.threads``).  A chunk is computed when its first item is
+        asked for, so a caller that stops early (a time limit, σ = ∞) has polished at most one chunk
+        more than a serial loop, and takes the same results in the same order."""
+        ts, k = [np.asarray(t, dtype=np.int64) for t in ts], n_threads()
+        for i in range(0, len(ts), k):
+            chunk = ts[i:i + k]
+            yield from zip(chunk, thread_map(lambda t: self.polish(t, mode, s, anchors=anchors), chunk))
+
 
 class MapPool:
     """Distinct maps with their exact scores, best first.
@@ -331,17 +341,14 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
     warm_bij = [t for t in warm if t.max() < n]
 
     def run_all(stage, ts):
-        """Polish every start of ``ts`` (parallel threads), adding the results in order until
-        ``late()``: the same pool as polishing them one after the other (``threads``)."""
-        ts, k = list(ts), n_threads()  # one start per thread between two looks at ``late()``
-        for i in range(0, len(ts), k):
-            if late():
+        """Polish every start of ``ts`` (``SearchStage.polished``), adding the results in order
+        until ``late()``: the same pool as polishing them one after the other."""
+        done = stage.polished(ts, mode, s_obj, lm)
+        while not late():
+            item = next(done, None)
+            if item is None:
                 return
-            done = thread_map(lambda t: stage.polish(t, mode=mode, s=s_obj, anchors=lm), ts[i:i + k])
-            for t in done:
-                if late():
-                    return
-                pool.add(t)
+            pool.add(item[1])
 
     def run(stage, t):
         run_all(stage, [t])
