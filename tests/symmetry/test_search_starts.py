@@ -74,3 +74,27 @@ def test_bijection_reflection_start():
     cand = S.reflection_starts(D, n, np.arange(n), np.array([], dtype=np.int64))
     assert any(np.mean(t == mirror) >= 0.9 for t in cand)
     assert witness_search(D).sigma == np.inf
+
+
+def test_remembered_starts_are_the_computed_ones_and_read_only():
+    """``starts._memo``: a repeated call returns the maps of a fresh computation, in a new list
+    of read-only arrays, and different arguments (landmarks, grid) are not confused."""
+    rng = np.random.default_rng(5)
+    pts = rng.normal(size=(30, 3))
+    D = cdist(pts, pts)
+    free = np.arange(1, 30, dtype=np.int64)
+    first = S.spectral_starts(D, free, 6, 3)
+    again = S.spectral_starts(D.copy(), free.copy(), 6, 3)
+    fresh = S.spectral_starts.__wrapped__(D, free, 6, 3)
+    assert again is not first and len(first) == len(fresh)
+    assert all(np.array_equal(a, b) for a, b in zip(again, fresh))
+    with pytest.raises(ValueError):
+        again[0][0] = 1
+    again.sort(key=lambda t: int(t[3]))  # the caller's list, not the remembered one
+    assert all(np.array_equal(a, b) for a, b in zip(S.spectral_starts(D, free, 6, 3), fresh))
+    grid = [1.0, 0.25]
+    a = S.gilmore_lawler_starts(D, free, np.array([0]), grid)
+    b = S.gilmore_lawler_starts(D, np.arange(2, 30), np.array([0, 1]), grid)
+    fresh = S.gilmore_lawler_starts.__wrapped__(D, free, np.array([0]), grid)
+    assert all(np.array_equal(x, y) for x, y in zip(a, fresh))
+    assert all(t[1] == 1 for t in b)
