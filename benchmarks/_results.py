@@ -80,8 +80,9 @@ def baseline_src(rev: str) -> tuple[str, Path]:
 def run_variant(code: str, src: Path | None = None, cache: Path | None = None, timeout: float | None = None) -> dict:
     """Python ``code`` in a fresh interpreter, with ``src`` first on the path (a ``baseline_src``; None:
     the working tree) and ``SHAPECOND_CACHE=cache`` if given: wall, CPU (the process and the children it
-    waited for: not loky's reusable workers, which are not reaped), its peak RSS in MB, the 1-minute load
-    average before, stdout.  Raises on a non-zero exit."""
+    waited for: not loky's reusable workers, which are not reaped), ``tree_cpu`` (the CPU of the whole
+    process tree, loky's workers included: they are reaped when the interpreter exits), its peak RSS in
+    MB, the 1-minute load average before, stdout.  Raises on a non-zero exit."""
     env = dict(os.environ)
     if cache is not None:
         env["SHAPECOND_CACHE"] = str(cache)
@@ -89,14 +90,17 @@ def run_variant(code: str, src: Path | None = None, cache: Path | None = None, t
         env["PYTHONPATH"] = str(src)
     load = os.getloadavg()[0]
     t = time.perf_counter()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run([sys.executable, "-c", code + "\nimport resource\nru, rc = resource.getrusage("
                            "resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)\n"
                            "print('__CPU__', ru.ru_utime + ru.ru_stime + rc.ru_utime + rc.ru_stime, "
                            "ru.ru_maxrss / 1024)"],
                           capture_output=True, text=True, env=env, timeout=timeout)
     wall = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    tree = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     if proc.returncode != 0:
         raise RuntimeError(proc.stderr.strip().splitlines()[-1] if proc.stderr.strip() else "child failed")
     out, tail = proc.stdout.rsplit("__CPU__", 1)
     cpu, rss = tail.split()
-    return dict(wall=wall, cpu=float(cpu), rss=float(rss), load=load, stdout=out)
+    return dict(wall=wall, cpu=float(cpu), tree_cpu=tree, rss=float(rss), load=load, stdout=out)
