@@ -118,8 +118,9 @@ def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(),
                 iterations=int(res.nit), start=init)
     n_core = core_size(ls.size)
     if nested and n_core:
-        core = faq_match(Ds, Dt, ls[:n_core], lt[:n_core], objective, init, sigma, sigma_factor,
-                         quantile_weight, maxiter, seed, nested)
+        core = faq_match(Ds, Dt, ls[:n_core], lt[:n_core], objective=objective, init=init,
+                         sigma=sigma, sigma_factor=sigma_factor, quantile_weight=quantile_weight,
+                         maxiter=maxiter, seed=seed, nested=nested)
         start = with_landmarks(core.t, ls, lt)
         free_s = np.setdiff1d(np.arange(n), ls)
         free_t = np.setdiff1d(np.arange(n), lt)

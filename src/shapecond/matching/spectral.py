@@ -421,8 +421,10 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
         n_core = core_size(cand.landmarks_source.size)
         if nested and n_core:
             ls, lt = cand.landmarks_source, cand.landmarks_target
-            core = lh05_match(D_source, D_target, ls[:n_core], lt[:n_core], k, sigma, sigma_factor,
-                              rounding, refine, rounds, quantile_weight, tol, max_iter, nested)
+            core = lh05_match(D_source, D_target, ls[:n_core], lt[:n_core], k=k, sigma=sigma,
+                              sigma_factor=sigma_factor, rounding=rounding, refine=refine,
+                              rounds=rounds, quantile_weight=quantile_weight, tol=tol,
+                              max_iter=max_iter, nested=nested)
             t_c, f_c = R.refine(D_source, D_target, with_landmarks(core.t, ls, lt), free, fine, knn)
             if f_c > f:
                 t, f = t_c, f_c
