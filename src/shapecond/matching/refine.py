@@ -36,6 +36,8 @@ import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from shapecond.landmarks.fps import fps_landmarks
+
 from shapecond.matching.consistency import (  # noqa: F401  (re-exported for spectral and tests)
     SUPPORT, Kernel, _f64, _gain_band, _gain_columns, _gain_entry, _gain_near, _gain_row, _k,
     _objective, _objective_near, _support_terms, gain, objective, support_lists)
@@ -273,12 +275,31 @@ def _quantile_cost(Ds, Dt, t, rows, band, anchors, rank):
     return C
 
 
+def anchor_order(D_source, m: int) -> np.ndarray:
+    """``m`` samples in farthest-point order from an end of the diameter (the sample
+    farthest from any other), from the distances alone.
+
+    The order does not depend on how the samples are numbered (a relabelled
+    instance gets the relabelled samples, up to exact ties of distances), nor
+    on the landmarks: matching the same samples listed in another order — the
+    evaluation lists a problem's landmarks first — moves them the same way,
+    which the landmark-nested matchers (``shapecond.matching.nested``) need
+    for their bound to hold between two such calls.
+    """
+    D = np.asarray(D_source)
+    if m <= 0:
+        return np.zeros(0, dtype=np.int64)
+    start = int(np.argmax(D.max(axis=1)))
+    return np.array([start] + fps_landmarks(D, D.shape[0], m - 1, fixed=[start]), dtype=np.int64)
+
+
 def robust_reassignment(D_source, D_target, t, free, quantile: float = 0.25,
                         n_anchors: int = 64, knn=None, k: int = 64) -> np.ndarray:
     """Re-place every free sample by the anchors ``T a`` (module docstring).
 
-    The anchors are the first ``n_anchors`` source samples (farthest-point
-    order spreads them over the shape).  Each free sample may move to its
+    The anchors are the samples that are not free (the landmarks, whose
+    images are right) and the first farthest-point samples of ``D_source``
+    (``anchor_order``), ``n_anchors`` in all.  Each free sample may move to its
     image's ``k`` nearest target samples (``knn``; a region shifted by a sample
     or two comes back), the images shared by the free samples, assigned to
     minimise the sum of the ``quantile``-quantiles of the distance disagreements.
@@ -287,7 +308,10 @@ def robust_reassignment(D_source, D_target, t, free, quantile: float = 0.25,
     t = np.asarray(t, dtype=np.int64)
     free = np.asarray(free, dtype=np.int64)
     knn = neighbours(Dt, k) if knn is None or knn.shape[1] < k else knn
-    anchors = np.arange(min(n_anchors, Ds.shape[0]), dtype=np.int64)
+    fixed = np.setdiff1d(np.arange(Ds.shape[0]), free)
+    spread = anchor_order(Ds, min(n_anchors, Ds.shape[0]))
+    spread = spread[~np.isin(spread, fixed)][:max(0, n_anchors - fixed.size)]
+    anchors = np.concatenate([fixed, spread])
     rank = min(anchors.size - 1, max(0, int(round(quantile * (anchors.size - 1)))))
     img = t[free]
     band = np.ascontiguousarray(np.concatenate([img[:, None], knn[img, :k]], axis=1))

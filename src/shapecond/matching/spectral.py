@@ -56,6 +56,11 @@ every such choice is listed here.
    local kernel as affinity, followed by the same refinement.  ``info``
    reports the candidates of the round that produced the map
    (``SampleMatch.candidates``) and its objective.
+6. Nesting (``nested=True``, default; with more than three landmarks): the
+   problem with the first three landmarks is matched too, its map sent to the
+   other landmarks and refined, and the map with the larger objective is
+   returned (``shapecond.matching.nested``: more correct landmarks never end
+   on a lower objective than the first three's map when it satisfies them).
 """
 
 from __future__ import annotations
@@ -70,6 +75,7 @@ from scipy.optimize import linear_sum_assignment
 from shapecond.errors import InputError, TooLargeError
 from shapecond.matching import refine as R
 from shapecond.matching.candidates import Candidates, band_candidates, k_best_candidates
+from shapecond.matching.nested import core_size, with_landmarks
 
 #: refuse dense affinity matrices above this many bytes (float32)
 MAX_AFFINITY_BYTES = 3 * 2**30
@@ -325,7 +331,8 @@ def fine_kernel(h: float) -> R.Kernel:
 def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: int = 20,
                sigma: float | None = None, sigma_factor: float = 2.0,
                rounding: str = "assignment", refine: bool = True, rounds: int = 3,
-               quantile_weight: float = 0.5, tol: float = 1e-7, max_iter: int = 500) -> SampleMatch:
+               quantile_weight: float = 0.5, tol: float = 1e-7, max_iter: int = 500,
+               nested: bool = True) -> SampleMatch:
     """Leordeanu–Hebert spectral matching with landmarks, source to target.
 
     Parameters
@@ -348,12 +355,21 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
         the plain LH05 of the paper.
     rounds : int
         At most this many spectral rounds on candidates iterated from the map.
+    nested : bool
+        With more than three landmarks and ``refine``, also match with the first
+        three (this very function), send that map to the other landmarks, refine
+        it and keep the larger objective (``nested``): ``info["objective"]`` is
+        then at least that of the map matched with the first three landmarks
+        whenever that map sends the others to their images.
 
     Returns
     -------
     SampleMatch
         ``t`` is a total injective map of source samples into target samples;
-        ``info["objective"]`` is the local-kernel objective of ``t`` (refined runs).
+        ``info["objective"]`` is the local-kernel objective of ``t`` (refined runs);
+        ``info["start"]`` says whether ``t`` came from this problem's own
+        spectral start (``"spectral"``) or from the first three landmarks'
+        map (``"core"``).
     """
     if rounding not in ("greedy", "assignment"):
         raise InputError(f"unknown rounding {rounding!r} (greedy or assignment)")
@@ -401,6 +417,18 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
             best = (t_r, f, c)
             t = t_r
         t, f, cand = best
-        info.update(objective=f, coarse_rel=coarse.rel, h=h, candidates=cand.size)
+        info.update(objective=f, coarse_rel=coarse.rel, h=h, candidates=cand.size, start="spectral")
+        n_core = core_size(cand.landmarks_source.size)
+        if nested and n_core:
+            ls, lt = cand.landmarks_source, cand.landmarks_target
+            core = lh05_match(D_source, D_target, ls[:n_core], lt[:n_core], k=k, sigma=sigma,
+                              sigma_factor=sigma_factor, rounding=rounding, refine=refine,
+                              rounds=rounds, quantile_weight=quantile_weight, tol=tol,
+                              max_iter=max_iter, nested=nested)
+            t_c, f_c = R.refine(D_source, D_target, with_landmarks(core.t, ls, lt), free, fine, knn)
+            if f_c > f:
+                t, f = t_c, f_c
+                cand = core.candidates
+                info.update(objective=f, candidates=cand.size, start="core")
     info["seconds"] = time.perf_counter() - t0
     return SampleMatch(t, "lh05", info, cand)
