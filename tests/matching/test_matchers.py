@@ -42,6 +42,23 @@ def test_bad_landmarks_are_input_errors():
         faq_match(D, D[:15, :15], [0], [0])
 
 
+@pytest.mark.parametrize("matcher", [lh05_match, faq_match])
+@pytest.mark.parametrize("damage, needle", [("inf", "NaN or infinite"), ("nan", "NaN or infinite"),
+                                            ("asymmetric", "not symmetric"), ("negative", "negative")])
+def test_invalid_distances_are_input_errors(matcher, damage, needle):
+    """An invalid matrix (e.g. infinite distances of a disconnected surface) is refused with one
+    clear error, not matched into a number nor a scipy traceback."""
+    _, D = _planar(20, 0)
+    E = D.copy()
+    E[0, 5] = {"inf": np.inf, "nan": np.nan, "asymmetric": 2.0 * E[0, 5], "negative": -1.0}[damage]
+    if damage != "asymmetric":
+        E[5, 0] = E[0, 5]
+    with pytest.raises(InputError, match=needle):
+        matcher(D, E, [0, 1, 2], [0, 1, 2])
+    with pytest.raises(InputError, match=needle):
+        matcher(E, D, [0, 1, 2], [0, 1, 2])
+
+
 @settings(max_examples=20, deadline=None)
 @given(st.integers(0, 10_000), st.integers(1, 6))
 def test_k_best_candidates_equal_brute_force(seed, k):

@@ -38,6 +38,7 @@ import time
 import numpy as np
 from scipy.optimize import linear_sum_assignment, quadratic_assignment
 
+from shapecond.checks import check_distance_matrix
 from shapecond.errors import InputError
 from shapecond.matching.candidates import check_landmarks, descriptor_cost
 from shapecond.matching.nested import core_size, with_landmarks
@@ -82,6 +83,8 @@ def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(),
         ``info["value"]`` is the objective of ``t``.
     """
     t0 = time.perf_counter()
+    check_distance_matrix(D_source, "source distances")  # one clear error for NaN, inf, asymmetry...
+    check_distance_matrix(D_target, "target distances")
     Ds = np.asarray(D_source, dtype=np.float64)
     Dt = np.asarray(D_target, dtype=np.float64)
     if Ds.shape != Dt.shape:

@@ -72,6 +72,7 @@ import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from shapecond.checks import check_distance_matrix
 from shapecond.errors import InputError, TooLargeError
 from shapecond.matching import refine as R
 from shapecond.matching.candidates import Candidates, band_candidates, k_best_candidates
@@ -374,6 +375,8 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
     if rounding not in ("greedy", "assignment"):
         raise InputError(f"unknown rounding {rounding!r} (greedy or assignment)")
     t0 = time.perf_counter()
+    check_distance_matrix(D_source, "source distances")  # one clear error for NaN, inf, asymmetry...
+    check_distance_matrix(D_target, "target distances")
     D_source = np.asarray(D_source, dtype=np.float64)
     D_target = np.asarray(D_target, dtype=np.float64)
     n_s, n_t = D_source.shape[0], D_target.shape[0]
