@@ -30,7 +30,8 @@ from matplotlib.figure import Figure
 from ..errors import InputError
 from ..output import atomic_open
 
-from .scene import AMBIENT, DEFAULT_VIEWS, DIFFUSE, FACING, Scene, guess_up, landmark_colour, make_scene
+from .scene import AMBIENT, DEFAULT_VIEWS, DIFFUSE, FACING, Scene, guess_up, landmark_colour, make_scene, \
+    view_label
 
 __all__ = ["DEFAULT_VIEWS", "draw_rows", "draw_scene", "guess_up", "new_figure", "render_png", "render_rows",
            "render_scene", "save_figure", "view_rotation"]
@@ -85,14 +86,14 @@ def _draw_view(ax, scene: Scene, layer, R, fnormals, labels):
             ax.plot([p[0], q[0]], [p[1], q[1]], color="black", lw=0.7, alpha=0.7, zorder=4)
         ax.scatter(S[:, 1, 0], S[:, 1, 1], s=4, c="black", zorder=4)
     for i, vid in enumerate(layer.landmarks):
-        colour = landmark_colour(i)
+        colour = landmark_colour(layer.rank(i))
         facing = scene.normals is None or (scene.normals[vid] @ R[2]) > FACING
         ax.scatter(
             [P[vid, 0]], [P[vid, 1]], s=70 if facing else 35, color=colour if facing else "none",
             edgecolors="black" if facing else colour, linewidths=1.0, zorder=5,
         )
         if labels and facing:
-            ax.annotate(str(i + 1), (P[vid, 0], P[vid, 1]), xytext=(4, 4),
+            ax.annotate(str(layer.rank(i) + 1), (P[vid, 0], P[vid, 1]), xytext=(4, 4),
                         textcoords="offset points", fontsize=7, zorder=6)
     pad = 0.03 * np.ptp(P[:, :2], axis=0).max()
     ax.set_xlim(P[:, 0].min() - pad, P[:, 0].max() + pad)
@@ -203,7 +204,7 @@ def draw_scene(fig, scene: Scene, *, labels: bool = True, extras=()) -> Figure:
             if extras[r] is not None:
                 extras[r](ax, lambda pts, R=R: scene.to_display(pts) @ R.T)
             if r == 0:
-                ax.set_title(f"elev {elev:g}°, azim {azim:g}°", fontsize=8)
+                ax.set_title(view_label(elev, azim), fontsize=8)
         if layer.label:
             axes[r][0].text(-0.02, 0.5, layer.label, transform=axes[r][0].transAxes,
                             rotation=90, ha="right", va="center", fontsize=9)

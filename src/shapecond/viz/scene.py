@@ -37,6 +37,11 @@ FACING = -0.2
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
+def view_label(elev: float, azim: float) -> str:
+    """Caption of a view (PNG panel title, HTML button)."""
+    return f"elev {elev:g}°, azim {azim:g}°"
+
+
 def landmark_colour(i: int) -> tuple:
     """RGB of the ``i``-th landmark (0-based): red for the first three, green after."""
     return LANDMARK_FIRST if i < 3 else LANDMARK_REST
@@ -76,6 +81,8 @@ class Layer:
     landmarks : vertex indices of the scene, in order (markers numbered from 1)
     notes : one text per landmark (e.g. its score), or empty
     segments : (k, 2, 3) display coordinates of moves drawn as chords, or None
+    ranks : place of each landmark in its order (colour and number), default 0, 1, 2, ...
+        (two shapes side by side list the same ranks twice)
     """
 
     rgba: np.ndarray
@@ -86,6 +93,11 @@ class Layer:
     landmarks: tuple = ()
     notes: tuple = ()
     segments: np.ndarray | None = None
+    ranks: tuple = ()
+
+    def rank(self, i: int) -> int:
+        """Place in the landmark order of the ``i``-th marker (0-based)."""
+        return int(self.ranks[i]) if self.ranks else i
 
 
 @dataclass(frozen=True, eq=False)
@@ -195,7 +207,8 @@ def make_scene(vertices, faces, layers, *, up: str = "z", ids=None, views=DEFAUL
 
     ``layers`` are Layers, or dicts of ``colour_layer`` arguments (``values``,
     ``cmap``, ``vmin``, ``vmax``, ``colorbar_label``, ``label``, ``landmarks``,
-    ``notes``, ``segments`` in input coordinates).
+    ``notes``, ``segments`` in input coordinates).  ``up=None``: the vertices are
+    display coordinates already (kept as they are).
     """
     from ..deformation.energy import vertex_normals
 
@@ -208,7 +221,7 @@ def make_scene(vertices, faces, layers, *, up: str = "z", ids=None, views=DEFAUL
         raise InputError("faces must be an (m, 3) array of vertex indices")
     if not views:
         raise InputError("at least one view is needed")
-    centre, frame = V.mean(axis=0), up_frame(up, V)
+    centre, frame = (np.zeros(3), np.eye(3)) if up is None else (V.mean(axis=0), up_frame(up, V))
     D = (V - centre) @ frame.T
     out = []
     for lay in layers:
