@@ -354,7 +354,9 @@ def _match_result_page(result, truth=None, **kw) -> str:
         if truth.ndim != 1 or truth.size <= int(src.ids.max()) or not np.issubdtype(truth.dtype, np.integer):
             raise InputError(f"the ground truth needs one target vertex id per source vertex id "
                              f"(0..{int(src.ids.max())}), got {truth.shape[0] if truth.ndim else 0}")
-        t = tgt.to_internal(truth[src.ids])
+        t = np.full(src.n_vertices, -1, dtype=np.int64)
+        known = truth[src.ids] >= 0  # -1: a source vertex without a true image
+        t[known] = tgt.to_internal(truth[src.ids][known])
     s = result.summary
     lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
     return match_page(src, tgt, vmap, ls, lt, truth=t, lines=lines, **kw)
@@ -389,3 +391,24 @@ def inline_result(result, height: int = 640):
         return inline(result_page(result), height)
     except InputError:
         return None
+
+
+def read_truth(spec):
+    """``--truth``: None, ``"same-ids"``, or a map file (line i: the target vertex id of source vertex i)."""
+    if spec is None or spec == "same-ids":
+        return spec
+    try:
+        truth = np.loadtxt(spec, dtype=np.int64, ndmin=1)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{spec}: not a ground-truth map (one integer target vertex id per line): "
+                         f"{str(exc).splitlines()[0][:80]}") from None
+    if truth.ndim != 1:
+        raise InputError(f"{spec}: a ground-truth map has one id per line")
+    return truth
+
+
+def write_evaluation_html(ev, folder, text: str) -> str:
+    """Write ``report.html`` (``evaluation_page``) into ``folder`` atomically; return its path."""
+    from ..output import write_text
+
+    return str(write_text(Path(folder) / "report.html", evaluation_page(ev, folder, text)))

@@ -256,7 +256,7 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       let text = `${this.partName(i)}vertex ${id}`;
       if (l.vals) text += `\n${l.value_name || "value"}: ${fmt(l.vals[i])}`;
       if (j >= 0) text += `\n→ ${this.partName(j)}vertex ${this.ids ? this.ids[j] : j}`;
-      this.hover.textContent = text; this.hover.style.display = "";
+      this.hover.textContent = text; this.hover.style.display = "block";
       this.hover.setAttribute("data-vertex", String(id));
     }
 
