@@ -36,6 +36,11 @@ def _f(v) -> str:
     return "inf" if math.isinf(v) else f"{v:.4g}"
 
 
+def _name(shape) -> str:
+    geom = getattr(shape, "geometry", None)
+    return getattr(geom, "name", None) or "a distance matrix"
+
+
 def score_page(result, title: str | None = None) -> str:
     """Page of a ``ScoreResult``: witness map and scale-aware witness with the score's summary."""
     shape, sc = result.shape, result.score
@@ -65,7 +70,7 @@ def score_page(result, title: str | None = None) -> str:
             "takes the reference colour of the image of its nearest sample under the witness map, the "
             "near-isometry that makes the shape hard to match; chords join moved samples to their images. "
             "Where the map is the identity the two agree; a mirror symmetry swaps left and right colours.</p>"]
-    return page(title or "shapecond score: the witness map", body)
+    return page(f"shapecond score: the witness map of {_name(shape)}", body)
 
 
 def heatmap_page(shape, values, *, landmarks=(), up=None, title=None, lines=(), cmap="turbo",
@@ -76,7 +81,7 @@ def heatmap_page(shape, values, *, landmarks=(), up=None, title=None, lines=(), 
     body = [summary(lines) if lines else "", viewer(scene),
             "<p>Low values are good landmarks: fixing that point breaks the near-symmetries. Values are "
             "computed at the samples and interpolated between them (hover shows the interpolated value).</p>"]
-    return page(title or "shapecond heatmap", body)
+    return page(f"shapecond heatmap: {_name(shape)}", body)
 
 
 def landmarks_page(shape, result, *, up=None, title=None) -> str:
@@ -94,7 +99,7 @@ def landmarks_page(shape, result, *, up=None, title=None) -> str:
     body = [summary([f"method {result.method}, {shape.n_samples} samples, {result.seconds:.2f} s",
                      f"{name} without these landmarks: {_f(result.initial_score)}"]),
             viewer(scene), table(["#", "vertex id", f"{name} after"], rows)]
-    return page(title or f"shapecond landmarks ({result.method})", body)
+    return page(f"shapecond landmarks: {result.method} on {_name(shape)}", body)
 
 
 def local_page(geometry, heatmap, fixed=(), *, result=None, title=None) -> str:
@@ -113,7 +118,7 @@ def local_page(geometry, heatmap, fixed=(), *, result=None, title=None) -> str:
             "<p>Where fixing one more vertex would lower the local score most (low values: good landmarks "
             "for deformation-based matching); modal approximation, infinite where zero modes remain "
             "(drawn with the largest finite value).</p>"]
-    return page(title or f"shapecond local: {geometry.name}", body)
+    return page(f"shapecond local: {geometry.name}", body)
 
 
 # --- matching ---------------------------------------------------------------------------------
@@ -214,7 +219,7 @@ def match_page(src, tgt, vmap, landmarks_source=(), landmarks_target=(), *, trut
             "vertex mapped nearest to it: where the map is right the colours carry over smoothly. Landmarks "
             "are numbered alike on both shapes and joined. Hover a source vertex: its image is marked on the "
             "target.</p>"]
-    return page(title or f"shapecond match: {src.name} → {tgt.name}", body)
+    return page(f"shapecond match: {src.name} → {tgt.name}", body)
 
 
 # --- evaluation -----------------------------------------------------------------------------------

@@ -96,6 +96,7 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       if (this.faces) g.setIndex(new T.BufferAttribute(this.faces, 1));
       g.computeBoundingSphere();
       this.centre = g.boundingSphere.center.clone(); this.radius = g.boundingSphere.radius || 1;
+      g.computeBoundingBox(); this.box = g.boundingBox;
       const [ambient, diffuse] = this.d.shading;
       const mat = new T.RawShaderMaterial({
         glslVersion: T.GLSL3, side: T.DoubleSide,
@@ -172,7 +173,19 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       this.side.append(ol);
     }
 
-    setView(k) { [this.elev, this.azim] = this.d.views[k]; this.zoom = 1; this.draw(); }
+    setView(k) { [this.elev, this.azim] = this.d.views[k]; this.zoom = 1; this.fitted = null; this.draw(); }
+
+    // half-extents of the bounding box seen from the current view (the PNGs' panels are fitted alike)
+    fit(f) {
+      const b = this.box, c = this.centre;
+      let w = 1e-9, h = 1e-9;
+      for (const x of [b.min.x, b.max.x]) for (const y of [b.min.y, b.max.y]) for (const z of [b.min.z, b.max.z]) {
+        const dx = x - c.x, dy = y - c.y, dz = z - c.z;
+        w = Math.max(w, Math.abs(dx * f.right.x + dy * f.right.y + dz * f.right.z));
+        h = Math.max(h, Math.abs(dx * f.up.x + dy * f.up.y + dz * f.up.z));
+      }
+      return [w, h];
+    }
 
     // the camera of shapecond.viz.render.view_rotation: rows right, up, toward the viewer
     frame() {
@@ -185,7 +198,9 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
     place() {
       const w = this.stage.clientWidth || 600, h = this.stage.clientHeight || 400;
       if (this.size !== `${w}x${h}`) { this.renderer.setSize(w, h, false); this.size = `${w}x${h}`; }
-      const f = this.frame(), c = this.camera, half = 1.05 * this.radius / this.zoom, asp = w / h;
+      const f = this.frame(), c = this.camera, asp = w / h;
+      if (!this.fitted) this.fitted = this.fit(f);  // kept while the shape is turned, so it does not jump
+      const half = 1.08 * Math.max(this.fitted[1], this.fitted[0] / asp) / this.zoom;
       c.left = -half * asp; c.right = half * asp; c.top = half; c.bottom = -half;
       c.position.copy(this.centre).addScaledVector(f.toward, 3 * this.radius);
       c.up.copy(f.up); c.lookAt(this.centre); c.updateProjectionMatrix(); c.updateMatrixWorld();
