@@ -33,11 +33,18 @@ def _data(document: str) -> list:
 
 
 def _front_vertex(data: dict, k: int = 0) -> int:
-    """Index of the display vertex nearest the camera of view ``k`` (nothing can hide it)."""
+    """The display vertex nearest the camera of view ``k`` (nothing can hide it), off the mesh's boundary
+    (a ray through a boundary vertex grazes the edge of its triangles)."""
     import base64
 
     P = np.frombuffer(base64.b64decode(data["positions"]), np.float32).reshape(-1, 3)
-    return int(np.argmax(P @ view_rotation(*data["views"][k])[2]))
+    depth = P @ view_rotation(*data["views"][k])[2]
+    if data["faces"] is not None:
+        F = np.frombuffer(base64.b64decode(data["faces"]), np.uint32).reshape(-1, 3).astype(np.int64)
+        E = np.sort(np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        edges, count = np.unique(E, axis=0, return_counts=True)
+        depth[np.unique(edges[count == 1])] = -np.inf
+    return int(np.argmax(depth))
 
 
 def _id(data: dict, i: int) -> int:
@@ -178,6 +185,7 @@ def _check(page, errors, requests, path: Path, k: int = 0):
     assert img.std() > 0.05 and (img.max(axis=2) - img.min(axis=2)).max() > 0.2  # drawn, in colour
     data = _data(path.read_text())[k]
     i = _front_vertex(data)
+    canvas.scroll_into_view_if_needed()
     xy = page.evaluate(f"window.shapecond.viewers[{k}].screenOf({i})")
     page.mouse.move(xy["x"], xy["y"])
     hover = page.locator(".sc-hover").nth(k)
