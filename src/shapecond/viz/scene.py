@@ -201,9 +201,11 @@ def colour_layer(data, n: int, cmap: str = "viridis", vmin=None, vmax=None, *, h
     return Layer(rgba, colorbar=bar, **kw)
 
 
-def make_scene(vertices, faces, layers, *, up: str = "z", ids=None, views=DEFAULT_VIEWS, title=None,
-               point_size: float | None = None, notes=()) -> Scene:
+def make_scene(vertices, faces, layers, *, up: str | None = "z", ids=None, views=DEFAULT_VIEWS, **meta) -> Scene:
     """A Scene of one shape given in input coordinates (checked; landmarks must be vertex indices).
+
+    ``meta``: the Scene's ``title``, ``notes`` and ``point_size`` (default 6, or 30 for
+    a point cloud of at most 2000 points).
 
     ``layers`` are Layers, or dicts of ``colour_layer`` arguments (``values``,
     ``cmap``, ``vmin``, ``vmax``, ``colorbar_label``, ``label``, ``landmarks``,
@@ -237,11 +239,13 @@ def make_scene(vertices, faces, layers, *, up: str = "z", ids=None, views=DEFAUL
         if any(v < 0 or v >= n for v in lms):
             raise InputError("landmark vertex index out of range")
         out.append(replace(lay, landmarks=lms))
+    point_size = meta.pop("point_size", None)
     if point_size is None:
         point_size = 6.0 if F is not None or n > 2000 else 30.0
+    meta["notes"] = tuple(meta.get("notes", ()))
     return Scene(D, F, tuple(out), np.arange(n) if ids is None else np.asarray(ids, dtype=np.int64),
-                 tuple(tuple(float(a) for a in v) for v in views), title, centre, frame, float(point_size),
-                 normals=None if F is None else vertex_normals(D, F), notes=tuple(notes))
+                 tuple(tuple(float(a) for a in v) for v in views), centre=centre, frame=frame,
+                 point_size=float(point_size), normals=None if F is None else vertex_normals(D, F), **meta)
 
 
 # --- the scenes of the commands ----------------------------------------------------------
@@ -260,9 +264,10 @@ def shape_points(shape):
     return V, None, np.arange(V.shape[0]), np.arange(V.shape[0])
 
 
-def heatmap_scene(shape, values, *, landmarks=(), up=None, views=DEFAULT_VIEWS, method="smooth", cmap="turbo",
-                  title=None, colorbar_label="σ with the point fixed", log=None) -> Scene:
-    """The heat map of ``viz.heatmap.render_heatmap_png`` as a Scene (see there for the arguments)."""
+def heatmap_scene(shape, values, *, landmarks=(), up=None, method="smooth", cmap="turbo",
+                  colorbar_label="σ with the point fixed", log=None, **place) -> Scene:
+    """The heat map of ``viz.heatmap.render_heatmap_png`` as a Scene (see there for the arguments);
+    ``place``: ``views`` and ``title`` (``make_scene``)."""
     from .heatmap import interpolate_to_vertices
 
     V, F, pts, ids = shape_points(shape)
@@ -277,8 +282,7 @@ def heatmap_scene(shape, values, *, landmarks=(), up=None, views=DEFAULT_VIEWS, 
     lm = [int(pts[int(i)]) for i in landmarks]
     layer = colour_layer(shown, len(V), cmap, colorbar_label=label, landmarks=lm, hover=vv,
                          value_name=colorbar_label)
-    return make_scene(V, F, [layer], up=up or guess_up(getattr(shape, "geometry", None)), ids=ids, views=views,
-                      title=title)
+    return make_scene(V, F, [layer], up=up or guess_up(getattr(shape, "geometry", None)), ids=ids, **place)
 
 
 def position_colours(V: np.ndarray) -> np.ndarray:
@@ -318,12 +322,7 @@ def witness_scene(shape, witness, *, landmarks=(), up=None, views=DEFAULT_VIEWS,
     return scene.with_layers([scene.layers[0], wit])
 
 
-def landmark_scene(V, F, landmarks, *, ids=None, up="z", views=DEFAULT_VIEWS, title=None, notes=(),
-                   label="landmarks", values=None, cmap="viridis", extra_layers=()) -> Scene:
-    """A shape (grey, or coloured by ``values``) with landmarks in order; ``notes`` one text per landmark.
-
-    ``extra_layers`` are further layers (dicts of ``colour_layer`` arguments), e.g.
-    one per landmark method.
-    """
-    layer = dict(values=values, cmap=cmap, landmarks=landmarks, notes=tuple(notes), label=label)
-    return make_scene(V, F, [layer, *extra_layers], up=up, ids=ids, views=views, title=title)
+def landmark_scene(V, F, landmarks, *, notes=(), label="landmarks", **place) -> Scene:
+    """A grey shape with landmarks in order; ``notes``: one text per landmark (e.g. the score after it);
+    ``place``: ``up``, ``ids``, ``views``, ``title`` (``make_scene``)."""
+    return make_scene(V, F, [dict(landmarks=landmarks, notes=tuple(notes), label=label)], **place)
