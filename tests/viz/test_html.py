@@ -275,3 +275,21 @@ def test_browser_evaluation_report(browser, tmp_path):
     page, errors, requests = _open(browser, path)
     _check(page, errors, requests, path)
     assert page.locator("button.sc-layer").count() == 2  # one colouring per method
+
+
+def test_browser_jupyter_inline_view(browser, tmp_path, heat):
+    """``_repr_html_`` is the page in a sandboxed iframe; the viewer starts inside it."""
+    snippet = heat._repr_html_()
+    assert snippet.startswith("<iframe srcdoc=") and "<script" not in snippet  # the page is escaped
+    path = tmp_path / "notebook.html"
+    path.write_text(f"<!DOCTYPE html><html><body><p>a notebook cell</p>{snippet}</body></html>")
+    page = browser.new_page()
+    errors = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto(path.as_uri())
+    page.wait_for_load_state("load")
+    frame = page.frames[1]  # another (opaque) origin: read from inside the frame
+    frame.wait_for_function("window.shapecond && (window.shapecond.ready || window.shapecond.error)",
+                            timeout=20_000)
+    assert frame.evaluate("window.shapecond.error") is None and frame.evaluate("window.shapecond.viewers.length") == 1
+    assert not errors
