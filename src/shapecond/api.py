@@ -218,9 +218,12 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     """
     from .deformation.local_score import ZERO_TOL, local_score_of_geometry
 
+    from dataclasses import replace
+
     g = require_mesh(load(x, force=force))
-    return local_score_of_geometry(g, parse_ids(landmarks), alpha=alpha, energy=energy,
-                                   zero_tol=ZERO_TOL if zero_tol is None else zero_tol)
+    zero_tol = ZERO_TOL if zero_tol is None else zero_tol
+    result = local_score_of_geometry(g, parse_ids(landmarks), alpha=alpha, energy=energy, zero_tol=zero_tol)
+    return replace(result, drawing=(g, dict(alpha=alpha, energy=energy, zero_tol=zero_tol)))
 
 
 def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, user_landmarks=None,
@@ -280,15 +283,29 @@ class HeatMapResult:
         return (f"HeatMapResult(N={self.samples.size}, sigma_before={self.sigma_before:.4g}, best={self.best}, "
                 f"best_value={self.best_value:.4g}, landmarks={list(self.landmarks)})")
 
+    def plot_values(self) -> np.ndarray:
+        """The values drawn: landmarks at ``sigma_before``, non-finite ones at the largest finite value."""
+        vals = np.where(np.isnan(self.values), self.sigma_before, self.values)
+        vals = np.where(np.isfinite(vals), vals, np.nan)
+        return np.where(np.isnan(vals), np.nanmax(vals) if np.any(np.isfinite(vals)) else 1.0, vals)
+
     def plot(self, fig=None, **kw):
         """The heat map drawn on the shape, onto ``fig`` (or a new Figure); returns the Figure."""
         from .viz.heatmap import render_heatmap_png
 
-        vals = np.where(np.isnan(self.values), self.sigma_before, self.values)
-        vals = np.where(np.isfinite(vals), vals, np.nan)
-        vals = np.where(np.isnan(vals), np.nanmax(vals) if np.any(np.isfinite(vals)) else 1.0, vals)
         L = list(range(len(self.landmarks)))
-        return render_heatmap_png(self.shape, vals, None, landmarks=L, fig=fig, **kw)
+        return render_heatmap_png(self.shape, self.plot_values(), None, landmarks=L, fig=fig, **kw)
+
+    def to_html(self, path, **kw) -> str:
+        """Write the heat map as a self-contained HTML page (``shapecond.viz.pages``); returns the path."""
+        from .viz.pages import write_result
+
+        return write_result(self, path, **kw)
+
+    def _repr_html_(self):
+        from .viz.pages import inline_result
+
+        return inline_result(self)
 
 
 def heatmap(x, landmarks=(), n_points: int | None = None, *, effort: str = "default",
@@ -307,10 +324,23 @@ class MatchResult:
 
     map: np.ndarray
     summary: dict
+    drawing: tuple = field(default=None, repr=False)  # (source, target Geometry, their landmarks) for to_html
 
     def to_dict(self) -> dict:
         """The summary of ``shapecond match --json`` plus the map itself."""
         return jsonable({**self.summary, "map": self.map})
+
+    def to_html(self, path, truth=None, **kw) -> str:
+        """Write the map as a self-contained HTML page (colour transfer, linked landmarks and, with
+        ``truth`` (target id per source id, or "same-ids"), the error field); returns the path."""
+        from .viz.pages import write_result
+
+        return write_result(self, path, truth=truth, **kw)
+
+    def _repr_html_(self):
+        from .viz.pages import inline_result
+
+        return inline_result(self)
 
     def __repr__(self) -> str:
         s = self.summary
@@ -368,7 +398,7 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
                    backend=backend, dense=dense, samples=samples, matcher_info=m.sample_map.info)
     if samples == "same-ids":
         summary.update(sample_error=m.info["sample_error"], exact=m.info["exact"])
-    return MatchResult(lines, summary)
+    return MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)))
 
 
 def evaluate(dataset_dir, **options):

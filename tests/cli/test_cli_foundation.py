@@ -60,4 +60,6 @@ def test_demo_json(tmp_path, capsys):
     assert code == 0 and summary["n_points"] == 60 and summary["covering_radius"] > 0
     assert summary["sigma"]["lower"] == "inf" and summary["witness_is_mirror_map"]
     assert len(summary["landmarks"]) == 3 and all(isinstance(s, float) for s in summary["scores"])
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["heatmap.png", "landmarks.png", "witness.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo.html", "heatmap.png", "landmarks.png", "witness.png"]
+    assert summary["pictures"]["html"] == str(tmp_path / "demo.html")
+    assert (tmp_path / "demo.html").read_text().count('class="sc-data"') == 3  # witness, heat map, landmarks

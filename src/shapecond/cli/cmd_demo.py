@@ -6,6 +6,9 @@
 3. CNBS (paper Section 6): the heat map (σ with each sample fixed) and three
    landmarks with the score after each, on the first ``--landmark-points`` samples
    (CNBS re-solves the score per candidate; N = 100 keeps the demo to seconds).
+
+Pictures: witness.png, heatmap.png and landmarks.png, and demo.html (the same three
+scenes in a self-contained page to turn in a browser, ``viz.pages.demo_page``).
 """
 
 from __future__ import annotations
@@ -29,7 +32,11 @@ def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
     from ..viz.render import render_png
     from ..viz.witness import render_witness_png
 
-    paths = {"witness": out / "witness.png", "heatmap": out / "heatmap.png", "landmarks": out / "landmarks.png"}
+    from ..output import write_text
+    from ..viz.pages import demo_page
+
+    paths = {"witness": out / "witness.png", "heatmap": out / "heatmap.png", "landmarks": out / "landmarks.png",
+             "html": out / "demo.html"}
     render_witness_png(shape, score.witness, paths["witness"], up="y")
     values = np.where(np.isfinite(heat.values), heat.values, np.nan)
     values = np.where(np.isnan(values), np.nanmax(values) if np.any(np.isfinite(values)) else 1.0, values)
@@ -38,6 +45,7 @@ def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
     g = small.geometry
     render_png(paths["landmarks"], g.vertices, g.faces, None, [int(small.samples[i]) for i in chosen.sample_indices],
                up="y", title="three CNBS landmarks (red)")
+    write_text(paths["html"], demo_page(shape, score, small, values, chosen))  # the same scenes, to turn
     return {k: str(v) for k, v in paths.items()}
 
 

@@ -11,6 +11,7 @@ import numpy as np
 from ..landmarks.cnbs import RESOLVE_FRACTION, heat_map
 from .cmd_landmarks import guess_up
 from ..limits import check_cost, search_seconds
+from ..errors import InputError
 from .common import (Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
                      pop_shape_options, shape_options)
 
@@ -19,7 +20,9 @@ from .common import (Float, build_shape, emit_json, fmt, info, json_option, load
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Vertex ids already fixed (comma-separated, or a file).")
-@click.option("--png", type=click.Path(dir_okay=False), required=True, help="Picture of the heat map (PNG).")
+@click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the heat map (PNG).")
+@click.option("--html", type=click.Path(dir_okay=False), default=None,
+              help="Self-contained HTML page of the heat map (turn it, hover a vertex for its id and value).")
 @click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh coloured by the heat map (PLY).")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Effort of the witness searches.")
@@ -32,7 +35,7 @@ from .common import (Float, build_shape, emit_json, fmt, info, json_option, load
               help="--score scale: distortion level ε [default: the median sample spacing].")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
-def command(input_spec, landmarks, png, ply, effort, resolve_fraction, score, epsilon, up, as_json, **kwargs):
+def command(input_spec, landmarks, png, html, ply, effort, resolve_fraction, score, epsilon, up, as_json, **kwargs):
     """The symmetry score with each sample fixed as a landmark, drawn on the shape.
 
     Low values (blue) are good landmarks: fixing them breaks the near-symmetries.
@@ -40,6 +43,8 @@ def command(input_spec, landmarks, png, ply, effort, resolve_fraction, score, ep
     """
     from ..viz.heatmap import render_heatmap_png
 
+    if not (png or html):
+        raise InputError("give --png FILE or --html FILE (or both) for the heat map")
     t0 = time.perf_counter()
     shape_kw = pop_shape_options(kwargs)
     ids = parse_ids(landmarks)
@@ -65,9 +70,16 @@ def command(input_spec, landmarks, png, ply, effort, resolve_fraction, score, ep
     plot_vals = np.where(np.isnan(vals), np.nanmax(np.where(np.isfinite(vals), vals, np.nan)), vals)
     title = (f"{name} with each point fixed (before: {fmt(before)}; "
              f"best: {fmt(float(values[best]))} at vertex {int(shape.sample_ids[best])})")
-    render_heatmap_png(shape, plot_vals, png, landmarks=L, up=guess_up(shape, up), title=title, ply=ply,
-                       cmap="turbo")
-    info(f"wrote {png}" + (f" and {ply}" if ply else ""))
+    if png:
+        render_heatmap_png(shape, plot_vals, png, landmarks=L, up=guess_up(shape, up), title=title, ply=ply,
+                           cmap="turbo")
+        info(f"wrote {png}" + (f" and {ply}" if ply else ""))
+    if html:
+        from ..output import write_text
+        from ..viz.pages import heatmap_page
+
+        write_text(html, heatmap_page(shape, plot_vals, landmarks=L, up=guess_up(shape, up), title=title))
+        info(f"wrote {html}")
     out = {
         "landmarks": [int(v) for v in shape.sample_ids[L]],
         "score": score,

@@ -57,9 +57,11 @@ def draw_landmarks(shape, result, png, ply, up, title):
               help="Distortion level ε of the scale-aware score [default: the median sample spacing].")
 @click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the landmarks (PNG).")
 @click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh with landmarks painted (PLY).")
+@click.option("--html", type=click.Path(dir_okay=False), default=None,
+              help="Self-contained HTML page of the landmarks in order with their scores.")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
-def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilon, png, ply, up, as_json,
+def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilon, png, ply, html, up, as_json,
             **kwargs):
     """Choose K landmarks and report the symmetry score after each one.
 
@@ -91,6 +93,8 @@ def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilo
     title = f"{method}: " + ", ".join(f"{v}" for v in result.landmarks)
     if png or ply:
         draw_landmarks(shape, result, png, ply, guess_up(shape, up), title)
+    if html:
+        info(f"wrote {result.to_html(html, up=guess_up(shape, up), title=title)}")
     d = result.to_dict()
     if as_json:
         emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds", "score")})

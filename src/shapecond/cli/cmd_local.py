@@ -29,19 +29,27 @@ from .common import Float, emit_json, force_option, info, json_option, parse_ids
               help="Eigenvalues below zero_tol x 2 count as zero modes (score inf).")
 @click.option("--heatmap-png", type=click.Path(dir_okay=False), default=None,
               help="Also draw the local score with each vertex fixed (modal approximation) to this PNG.")
+@click.option("--html", type=click.Path(dir_okay=False), default=None,
+              help="Self-contained HTML page of the local score with each vertex fixed (the doubt field).")
 @force_option
 @json_option
-def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, force, as_json):
+def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, html, force, as_json):
     """Local symmetry score sqrt(2 / lambda_min) of the energy Hessian, with its zero modes."""
     t0 = time.perf_counter()
     g = require_mesh(load_input(input_spec, force=force))
     fixed = g.to_internal(parse_ids(landmarks))
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(fixed, zero_tol=zero_tol, ids=g.ids)
+    hm = local_heatmap(problem, fixed, zero_tol=zero_tol) if heatmap_png or html else None
+    if html:
+        from ..output import write_text
+        from ..viz.pages import local_page
+
+        write_text(html, local_page(g, hm, fixed, result=result))
+        info(f"wrote {html}")
     if heatmap_png:
         from ..viz.render import guess_up, render_png
 
-        hm = local_heatmap(problem, fixed, zero_tol=zero_tol)
         render_png(heatmap_png, g.vertices, g.faces, hm.values, landmarks=[int(v) for v in fixed],
                    up=guess_up(g), title=f"{g.name}: local score with each vertex fixed",
                    colorbar_label="sigma_inf with the vertex fixed")

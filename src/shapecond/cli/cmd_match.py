@@ -12,6 +12,7 @@ import click
 import numpy as np
 
 from ..matching.pipeline import MATCHERS, SAMPLINGS
+from ..errors import InputError
 from ..output import atomic_open
 from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_option, parse_ids
 
@@ -47,11 +48,16 @@ from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_o
 @click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
               help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
+@click.option("--html", type=click.Path(dir_okay=False), default=None,
+              help="Self-contained HTML page of the map: colours carried source -> target, linked landmarks.")
+@click.option("--truth", default=None,
+              help="--html: ground-truth map (a file like -o's, or 'same-ids' for shapes with a common vertex "
+                   "order) to show the error field.")
 @force_option
 @json_option
 def command(source, target, landmarks_source, landmarks_target, matcher, points, seed,
             geodesic_backend, k, rounding, refine, samples, dense, largest_component, no_cache, output,
-            force, as_json):
+            html, truth, force, as_json):
     """Match SOURCE to TARGET with corresponding landmarks fixed; write the dense map.
 
     The map file has one line per SOURCE vertex id (0 .. largest id): the id of
@@ -61,6 +67,8 @@ def command(source, target, landmarks_source, landmarks_target, matcher, points,
     """
     from ..api import match
 
+    if truth is not None and not html:
+        raise InputError("--truth is shown by --html; give --html FILE too")
     t0 = time.perf_counter()
     options = {"k": k, "rounding": rounding, "refine": refine} if matcher == "lh05" else {}
     result = match(source, target, parse_ids(landmarks_source, "--landmarks-source"),
@@ -70,6 +78,10 @@ def command(source, target, landmarks_source, landmarks_target, matcher, points,
     out = Path(output)
     with atomic_open(out) as fh:
         np.savetxt(fh, result.map, fmt="%d")
+    if html:
+        from ..viz.pages import read_truth
+
+        info(f"wrote {result.to_html(html, truth=read_truth(truth))}")
     summary = dict(result.summary, source=str(source), target=str(target), output=str(out),
                    seconds=time.perf_counter() - t0)
     if as_json:

@@ -38,9 +38,11 @@ from .common import Float, build_shape, emit_json, fmt, info, json_option, load_
                    "[default: the median sample spacing].")
 @click.option("--scale-witness-png", type=click.Path(dir_okay=False), default=None,
               help="Write a picture of the scale-aware witness (the widest self-map within ε).")
+@click.option("--html", type=click.Path(dir_okay=False), default=None,
+              help="Write a self-contained HTML page of the witness maps (turn the shape, hover vertex ids).")
 @json_option
 def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png, epsilon, scale_witness_png,
-            as_json, **kw):
+            html, as_json, **kw):
     """How hard is INPUT to match: σ bracket, κ bracket and the witness map."""
     import time
 
@@ -65,6 +67,8 @@ def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png
             from ..viz.witness import render_witness_png
 
             render_witness_png(shape, witness, png, landmarks=tuple(sc.landmarks))
+    if html:
+        info(f"wrote {result.to_html(html)}")
     report["seconds"] = time.perf_counter() - t0  # everything, geodesics included
     if as_json:
         emit_json(report)

@@ -144,7 +144,7 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
         samples = [sample_of_vertex(shape, v) for v in verts]
         ids = [int(shape.geometry.ids[v]) for v in verts]
         return LandmarkResult(tuple(ids), tuple(samples), tuple(verts), tuple(float(v) for v in sc), method,
-                              time.perf_counter() - t0, initial)
+                              time.perf_counter() - t0, initial, shape=shape)
     elif method == "fps":
         from .fps import fps_landmarks
 

@@ -50,6 +50,7 @@ class LandmarkResult:
     initial_score: float | None = None
     heat_maps: tuple = field(default=(), repr=False)
     score: str = "sigma"
+    shape: object = field(default=None, repr=False, compare=False)  # the MetricShape, for to_html
 
     def to_dict(self) -> dict:
         """JSON-ready dict (keys of the CLI: landmarks, scores, method, seconds, ...)."""
@@ -62,6 +63,18 @@ class LandmarkResult:
             "initial_score": None if self.initial_score is None else float(self.initial_score),
             "score": self.score,
         })
+
+    def to_html(self, path, **kw) -> str:
+        """Write the landmarks (in order, with the score after each) as a self-contained HTML page;
+        returns the path."""
+        from ..viz.pages import write_result
+
+        return write_result(self, path, **kw)
+
+    def _repr_html_(self):
+        from ..viz.pages import inline_result
+
+        return inline_result(self)
 
 
 def sample_of_vertex(shape, vertex: int) -> int:
@@ -95,4 +108,4 @@ def make_result(shape, sample_indices, scores, method, seconds, initial_score=No
     for v in scores:
         clean.append(None if v is None else (math.inf if not math.isfinite(v) and v > 0 else float(v)))
     return LandmarkResult(tuple(ids), tuple(s), tuple(verts), tuple(clean), method, float(seconds),
-                          initial_score, tuple(heat_maps), score)
+                          initial_score, tuple(heat_maps), score, shape)

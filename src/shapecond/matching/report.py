@@ -291,13 +291,16 @@ def correlations(ev) -> dict:
 
 
 def write_report(ev, out_dir) -> Path:
-    """Write report.md, results.json and the PNGs into ``out_dir``; return the report path."""
+    """Write report.md, report.html (``viz.pages.evaluation_page``), results.json and the PNGs into
+    ``out_dir``; return the report path."""
     from shapecond.jsonable import dumps
     from shapecond.output import write_text
+    from shapecond.viz.pages import write_evaluation_html
 
     out_dir = Path(out_dir)
     plots = plot(ev, out_dir)
     path = write_text(out_dir / "report.md", markdown(ev, plots))
+    write_evaluation_html(ev, out_dir, markdown(ev, plots))
     data = dict(ev.to_dict(), correlation=correlations(by_protocol(ev, protocols(ev)[0])),
                 correlation_by_protocol={p: correlations(by_protocol(ev, p)) for p in protocols(ev)})
     write_text(out_dir / "results.json", dumps(data, indent=1))

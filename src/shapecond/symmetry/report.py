@@ -92,6 +92,17 @@ class ScoreResult:
         return render_witness_png(self.shape, self.score.witness, None, landmarks=tuple(self.score.landmarks),
                                   fig=fig, **kw)
 
+    def to_html(self, path, **kw) -> str:
+        """Write the witness map as a self-contained HTML page (``shapecond.viz.pages``); returns the path."""
+        from shapecond.viz.pages import write_result
+
+        return write_result(self, path, **kw)
+
+    def _repr_html_(self):
+        from shapecond.viz.pages import inline_result
+
+        return inline_result(self)
+
 
 def _scale(D, n, lm, epsilon, seed, effort, sc) -> ScaleScore:
     """δ(ε) started from the σ search's maps; with dense targets searched over the first M/2

@@ -1,4 +1,9 @@
-"""Pictures: headless PNG renderings (several views) and coloured PLY files.
+"""Pictures: headless PNG renderings (several views), coloured PLY files and HTML pages.
+
+* ``scene``: the render data every picture is drawn from (display frame, colourings,
+  colour bars, landmark styles, views, shading): one place computes them.
+* ``html`` / ``pages``: self-contained HTML pages with a 3-D viewer of the same scenes
+  (``--html``, ``result.to_html``, ``report.html``, ``demo.html``).
 
 * ``render.render_png`` / ``render.render_rows``: a shape with per-vertex values and
   landmarks (paper Figure 6 colours) from several views, with a colour bar.

@@ -20,16 +20,22 @@ from scipy.spatial import cKDTree
 
 from ..errors import InputError
 from .ply import write_ply
-from .render import DEFAULT_VIEWS, guess_up, render_png
-from ..symmetry.starts import classical_mds
+from .render import render_scene
+from .scene import DEFAULT_VIEWS, heatmap_scene, shape_points
 
 
-def _points(shape):
-    geom = getattr(shape, "geometry", None)
-    if geom is not None and getattr(shape, "samples", None) is not None:
-        return np.asarray(geom.vertices, float), geom.faces, np.asarray(shape.samples, np.int64)
-    V = classical_mds(np.asarray(shape.D, float))
-    return V, None, np.arange(V.shape[0])
+def idw(V: np.ndarray, sources, values, k: int = 4) -> np.ndarray:
+    """Inverse-distance weighting of ``values`` at vertices ``sources`` over the ``k`` Euclidean-nearest
+    of them, weights ``1 / (d + ε)²`` (the ``"smooth"`` interpolation); every value must be finite."""
+    src = np.asarray(sources, dtype=np.int64)
+    vals = np.asarray(values, dtype=float)
+    kk = min(k, src.size)
+    d, idx = cKDTree(V[src]).query(V, k=kk)
+    if kk == 1:
+        d, idx = d[:, None], idx[:, None]
+    eps = 1e-9 + 1e-3 * np.median(d[:, -1])
+    w = 1.0 / (d + eps) ** 2
+    return (w * vals[idx]).sum(axis=1) / w.sum(axis=1)
 
 
 def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -> np.ndarray:
@@ -43,7 +49,7 @@ def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -
     n, m = int(shape.n_samples), int(np.asarray(shape.D).shape[0])
     if values.shape not in ((n,), (m,)):
         raise InputError(f"values must have {n} (samples) or {m} (targets) entries, got {values.shape}")
-    V, _, pts = _points(shape)
+    V, _, pts, _ = shape_points(shape)
     src = pts[: values.size]
     if method == "nearest":
         near = getattr(shape, "nearest", None)
@@ -58,13 +64,7 @@ def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -
     if not finite.any():
         return np.full(V.shape[0], np.inf)
     vals[~finite] = vals[finite].max()
-    kk = min(k, src.size)
-    d, idx = cKDTree(V[src]).query(V, k=kk)
-    if kk == 1:
-        d, idx = d[:, None], idx[:, None]
-    eps = 1e-9 + 1e-3 * np.median(d[:, -1])
-    w = 1.0 / (d + eps) ** 2
-    return (w * vals[idx]).sum(axis=1) / w.sum(axis=1)
+    return idw(V, src, vals, k)
 
 
 def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = None, views=DEFAULT_VIEWS,
@@ -93,19 +93,10 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = No
     fig : matplotlib Figure or None
         Draw onto it; with ``path=None`` the Figure is returned (no PNG written).
     """
-    V, F, pts = _points(shape)
-    vv = interpolate_to_vertices(shape, values, method=method)
-    finite = vv[np.isfinite(vv)]
-    vmax = float(finite.max()) if finite.size else 1.0
-    vv = np.where(np.isfinite(vv), vv, vmax)
-    if log is None:  # auto: a wide range (one near-symmetry left) would flatten everything else
-        log = finite.size > 0 and finite.min() > 0 and vmax / finite.min() > 20.0
-    shown = np.log10(vv) if log else vv
-    label = f"log10 {colorbar_label}" if log else colorbar_label
-    lm_vertices = [int(pts[int(i)]) for i in landmarks]
-    up = up or guess_up(getattr(shape, "geometry", None))
-    out = render_png(path, V, F, shown, lm_vertices, views=views, up=up, cmap=cmap, title=title,
-                     colorbar_label=label, point_size=6.0 if F is not None or len(V) > 2000 else 30.0, fig=fig)
+    scene = heatmap_scene(shape, values, landmarks=landmarks, up=up, views=views, method=method, cmap=cmap,
+                          title=title, colorbar_label=colorbar_label, log=log)
+    out = render_scene(path, scene, fig=fig)
     if ply is not None:
-        write_ply(ply, V, F, shown, lm_vertices, cmap=cmap)
+        layer = scene.layers[0]  # the PNG's colours, in the input's coordinates
+        write_ply(ply, shape_points(shape)[0], scene.faces, layer.rgba, layer.landmarks)
     return out

@@ -3,31 +3,25 @@
 The file is written by ``shapes.io.write_mesh`` (trimesh's exporter with
 ``process=False``, so that the vertex order, and with it every vertex id, is kept,
 through the atomic writer).
-Scalars are turned into colours with a matplotlib colour map; landmarks can be painted
+Scalars are turned into colours by ``scene.colour_layer`` (the PNG's colour map); landmarks can be painted
 on top (first three red, the rest green, as the paper's Figure 6) together with their
 one-ring so that they are visible in a viewer.
 """
 
 from __future__ import annotations
 
-import matplotlib
 import numpy as np
 import trimesh
 
 from ..errors import InputError
+from .scene import colour_layer, landmark_colour
 
 
 def scalar_colours(values, cmap: str = "viridis", vmin=None, vmax=None) -> np.ndarray:
     """Map scalars (n,) to uint8 RGBA colours (n, 4); non-finite values get the top colour."""
-    v = np.asarray(values, dtype=float)
-    finite = v[np.isfinite(v)]
-    lo = vmin if vmin is not None else (float(finite.min()) if finite.size else 0.0)
-    hi = vmax if vmax is not None else (float(finite.max()) if finite.size else 1.0)
-    if hi <= lo:
-        hi = lo + 1.0
-    sm = matplotlib.cm.ScalarMappable(norm=matplotlib.colors.Normalize(lo, hi), cmap=cmap)
-    rgba = sm.to_rgba(np.where(np.isfinite(v), v, hi))
-    return np.round(np.asarray(rgba) * 255).astype(np.uint8)
+    v = np.asarray(values, dtype=float).ravel()
+    rgba = colour_layer(v, v.size, cmap, vmin, vmax).rgba
+    return np.round(rgba * 255).astype(np.uint8)
 
 
 def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, cmap="viridis",
@@ -79,7 +73,7 @@ def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, cmap="vi
         vid = int(vid)
         if not 0 <= vid < n:
             raise InputError(f"landmark vertex index {vid} out of range")
-        c = np.array([230, 20, 20, 255] if i < 3 else [30, 200, 30, 255], np.uint8)
+        c = np.round(np.array([*landmark_colour(i), 1.0]) * 255).astype(np.uint8)
         colours[vid] = c
         if nbrs is not None:
             colours[list(nbrs[vid])] = c

@@ -1,0 +1,322 @@
+// shapecond's HTML viewer: draws the scenes of shapecond.viz.scene embedded in the page.
+// Part of shapecond (MIT).  three.js is loaded from the page itself (script#sc-three, turned
+// into a module through a blob URL), so the page needs no network.  Each
+// <div class="sc-viewer"> holds a <script type="application/json"> with one scene.
+"use strict";
+(function () {
+  const PI = Math.PI;
+
+  function buffer(s) {
+    const b = atob(s), u = new Uint8Array(b.length);
+    for (let i = 0; i < b.length; i++) u[i] = b.charCodeAt(i);
+    return u.buffer;
+  }
+  const typed = (s, T) => (s === null || s === undefined ? null : new T(buffer(s)));
+
+  function fmt(v) {
+    if (v === null || v === undefined || Number.isNaN(v)) return "-";
+    if (!Number.isFinite(v)) return v > 0 ? "inf" : "-inf";
+    if (Number.isInteger(v)) return String(v);
+    return String(Number(v.toPrecision(4)));
+  }
+
+  function el(tag, cls, text) {
+    const e = document.createElement(tag);
+    if (cls) e.className = cls;
+    if (text !== undefined) e.textContent = text;
+    return e;
+  }
+
+  const MESH_VS = `in vec3 position; in vec3 rgb;
+uniform mat4 modelViewMatrix; uniform mat4 projectionMatrix;
+out vec3 vColour; out vec3 vView;
+void main() { vec4 mv = modelViewMatrix * vec4(position, 1.0); vView = mv.xyz; vColour = rgb;
+  gl_Position = projectionMatrix * mv; }`;
+  // headlight shading of the PNGs: colour * (ambient + diffuse |n.v|), n the face normal
+  const MESH_FS = `precision highp float; in vec3 vColour; in vec3 vView;
+uniform float ambient; uniform float diffuse; out vec4 outColour;
+void main() { vec3 n = normalize(cross(dFdx(vView), dFdy(vView)));
+  outColour = vec4(vColour * (ambient + diffuse * abs(n.z)), 1.0); }`;
+  const POINT_VS = `in vec3 position; in vec3 rgb;
+uniform mat4 modelViewMatrix; uniform mat4 projectionMatrix; uniform float size;
+out vec3 vColour;
+void main() { vColour = rgb; gl_PointSize = size; gl_Position = projectionMatrix * modelViewMatrix * vec4(position, 1.0); }`;
+  const POINT_FS = `precision highp float; in vec3 vColour; out vec4 outColour;
+void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(vColour, 1.0); }`;
+
+  class Viewer {
+    constructor(T, root, data) {
+      this.T = T; this.root = root; this.d = data;
+      this.n = data.n;
+      this.pos = typed(data.positions, Float32Array);
+      this.faces = typed(data.faces, Uint32Array);
+      this.ids = typed(data.ids, Int32Array);
+      this.partner = typed(data.partner, Int32Array);
+      this.layers = data.layers.map((l) => Object.assign({}, l, {
+        rgb: typed(l.colours, Uint8Array), vals: typed(l.values, Float32Array), seg: typed(l.segments, Float32Array),
+      }));
+      this.elev = data.views[0][0]; this.azim = data.views[0][1]; this.zoom = 1;
+      this.current = -1; this.frames = 0; this.firstFrame = null; this.hovered = -1;
+      this.dom(); this.three(); this.setLayer(0); this.events(); this.draw();
+    }
+
+    dom() {
+      const r = this.root;
+      this.bar = el("div", "sc-bar"); this.stage = el("div", "sc-stage");
+      this.canvas = el("canvas"); this.labels = el("div", "sc-labels"); this.hover = el("div", "sc-hover");
+      this.scale = el("div", "sc-scale"); this.side = el("div", "sc-side");
+      this.stage.append(this.canvas, this.labels, this.hover);
+      const main = el("div", "sc-main"); main.append(this.stage, this.side);
+      r.append(this.bar, main, this.scale);
+      if (this.layers.length > 1) {
+        this.layerButtons = this.layers.map((l, k) => {
+          const b = el("button", "sc-layer", l.label || `colouring ${k + 1}`);
+          b.onclick = () => this.setLayer(k); this.bar.append(b); return b;
+        });
+        this.bar.append(el("span", "sc-sep", "|"));
+      }
+      this.d.views.forEach((v, k) => {
+        const b = el("button", "sc-view", this.d.view_labels[k]);
+        b.onclick = () => this.setView(k); this.bar.append(b);
+      });
+      this.bar.append(el("span", "sc-help", "drag: turn, wheel: zoom, hover: vertex id and value"));
+    }
+
+    three() {
+      const T = this.T;
+      this.renderer = new T.WebGLRenderer({ canvas: this.canvas, antialias: true, preserveDrawingBuffer: true });
+      this.renderer.outputColorSpace = T.LinearSRGBColorSpace;
+      this.renderer.setClearColor(0xffffff, 1);
+      this.renderer.setPixelRatio(window.devicePixelRatio || 1);
+      this.scene = new T.Scene();
+      const g = new T.BufferGeometry();
+      g.setAttribute("position", new T.BufferAttribute(this.pos, 3));
+      this.colour = new T.BufferAttribute(new Uint8Array(this.n * 3), 3, true);
+      g.setAttribute("rgb", this.colour);
+      if (this.faces) g.setIndex(new T.BufferAttribute(this.faces, 1));
+      g.computeBoundingSphere();
+      this.centre = g.boundingSphere.center.clone(); this.radius = g.boundingSphere.radius || 1;
+      g.computeBoundingBox(); this.box = g.boundingBox;
+      const [ambient, diffuse] = this.d.shading;
+      const mat = new T.RawShaderMaterial({
+        glslVersion: T.GLSL3, side: T.DoubleSide,
+        uniforms: { ambient: { value: ambient }, diffuse: { value: diffuse }, size: { value: this.d.point_size } },
+        vertexShader: this.faces ? MESH_VS : POINT_VS, fragmentShader: this.faces ? MESH_FS : POINT_FS,
+      });
+      this.object = this.faces ? new T.Mesh(g, mat) : new T.Points(g, mat);
+      this.scene.add(this.object);
+      this.camera = new T.OrthographicCamera(-1, 1, 1, -1, this.radius * 0.01, this.radius * 10);
+      this.raycaster = new T.Raycaster();
+      this.raycaster.params.Points.threshold = this.radius * 0.01;
+      this.groups = this.layers.map((l) => this.overlay(l));
+      const mark = (c) => new T.Mesh(new T.SphereGeometry(this.radius * 0.012, 12, 8),
+        new T.MeshBasicMaterial({ color: c }));
+      this.mark = mark(0x111111); this.partnerMark = mark(0x2255ff);
+      this.mark.visible = this.partnerMark.visible = false;
+      this.scene.add(this.mark, this.partnerMark);
+    }
+
+    overlay(layer) {
+      const T = this.T, group = new T.Group();
+      layer.marks = layer.landmarks.map((lm) => {
+        const s = new T.Mesh(new T.SphereGeometry(this.radius * 0.018, 16, 12),
+          new T.MeshBasicMaterial({ color: new T.Color(lm.colour) }));
+        s.position.set(...lm.position); group.add(s);
+        const label = el("div", "sc-label", lm.label); label.style.display = "none";
+        this.labels.append(label);
+        return { lm, label };
+      });
+      if (layer.seg) {
+        const g = new T.BufferGeometry();
+        g.setAttribute("position", new T.BufferAttribute(layer.seg, 3));
+        group.add(new T.LineSegments(g, new T.LineBasicMaterial({ color: 0x000000, transparent: true, opacity: 0.7 })));
+      }
+      group.visible = false; this.scene.add(group);
+      return group;
+    }
+
+    setLayer(k) {
+      if (this.current >= 0) {
+        this.groups[this.current].visible = false;
+        this.layers[this.current].marks.forEach((m) => (m.label.style.display = "none"));
+      }
+      this.current = k;
+      const l = this.layers[k];
+      this.colour.array.set(l.rgb); this.colour.needsUpdate = true;
+      this.groups[k].visible = true;
+      if (this.layerButtons) this.layerButtons.forEach((b, i) => b.classList.toggle("sc-on", i === k));
+      this.showScale(l); this.showSide(l); this.showHover(); this.draw();
+    }
+
+    showScale(l) {
+      this.scale.innerHTML = "";
+      if (!l.colorbar) { this.scale.style.display = "none"; return; }
+      const c = l.colorbar; this.scale.style.display = "";
+      const ramp = el("div", "sc-ramp");
+      ramp.style.background = `linear-gradient(to right, ${c.stops.join(", ")})`;
+      const ticks = el("div", "sc-ticks");
+      ticks.append(el("span", "", fmt(c.lo)), el("span", "", fmt((c.lo + c.hi) / 2)), el("span", "", fmt(c.hi)));
+      this.scale.append(el("div", "sc-caption", c.label || ""), ramp, ticks);
+    }
+
+    showSide(l) {
+      this.side.innerHTML = "";
+      if (!l.landmarks.length) { this.side.style.display = "none"; return; }
+      this.side.style.display = "";
+      this.side.append(el("div", "sc-caption", "landmarks, in order"));
+      const ol = el("ol", "sc-landmarks");
+      l.landmarks.forEach((lm) => {
+        const li = el("li", "", `${lm.label}. ${lm.name}` + (lm.note ? ` — ${lm.note}` : ""));
+        li.style.borderLeft = `6px solid ${lm.colour}`;
+        li.onmouseenter = () => this.pick(lm.vertex); ol.append(li);
+      });
+      this.side.append(ol);
+    }
+
+    setView(k) { [this.elev, this.azim] = this.d.views[k]; this.zoom = 1; this.fitted = null; this.draw(); }
+
+    // half-extents of the bounding box seen from the current view (the PNGs' panels are fitted alike)
+    fit(f) {
+      const b = this.box, c = this.centre;
+      let w = 1e-9, h = 1e-9;
+      for (const x of [b.min.x, b.max.x]) for (const y of [b.min.y, b.max.y]) for (const z of [b.min.z, b.max.z]) {
+        const dx = x - c.x, dy = y - c.y, dz = z - c.z;
+        w = Math.max(w, Math.abs(dx * f.right.x + dy * f.right.y + dz * f.right.z));
+        h = Math.max(h, Math.abs(dx * f.up.x + dy * f.up.y + dz * f.up.z));
+      }
+      return [w, h];
+    }
+
+    // the camera of shapecond.viz.render.view_rotation: rows right, up, toward the viewer
+    frame() {
+      const e = this.elev * PI / 180, a = this.azim * PI / 180, T = this.T;
+      const toward = new T.Vector3(Math.cos(e) * Math.cos(a), Math.cos(e) * Math.sin(a), Math.sin(e));
+      const right = new T.Vector3(-Math.sin(a), Math.cos(a), 0);
+      return { toward, right, up: new T.Vector3().crossVectors(toward, right) };
+    }
+
+    place() {
+      const w = this.stage.clientWidth || 600, h = this.stage.clientHeight || 400;
+      if (this.size !== `${w}x${h}`) { this.renderer.setSize(w, h, false); this.size = `${w}x${h}`; }
+      const f = this.frame(), c = this.camera, asp = w / h;
+      if (!this.fitted) this.fitted = this.fit(f);  // kept while the shape is turned, so it does not jump
+      const half = 1.08 * Math.max(this.fitted[1], this.fitted[0] / asp) / this.zoom;
+      c.left = -half * asp; c.right = half * asp; c.top = half; c.bottom = -half;
+      c.position.copy(this.centre).addScaledVector(f.toward, 3 * this.radius);
+      c.up.copy(f.up); c.lookAt(this.centre); c.updateProjectionMatrix(); c.updateMatrixWorld();
+      return f;
+    }
+
+    draw() {
+      const f = this.place();
+      this.renderer.render(this.scene, this.camera);
+      this.frames += 1;
+      if (this.firstFrame === null) requestAnimationFrame(() => { if (this.firstFrame === null) this.firstFrame = performance.now(); });
+      const rect = this.canvas.getBoundingClientRect(), stage = this.stage.getBoundingClientRect();
+      for (const { lm, label } of this.layers[this.current].marks) {
+        const facing = lm.normal === null || (lm.normal[0] * f.toward.x + lm.normal[1] * f.toward.y +
+          lm.normal[2] * f.toward.z) > this.d.facing;
+        const p = this.screen(lm.position, rect);
+        label.style.display = facing ? "" : "none";
+        label.style.left = `${p.x - stage.left + 6}px`; label.style.top = `${p.y - stage.top - 16}px`;
+      }
+    }
+
+    screen(xyz, rect) {
+      const v = new this.T.Vector3(...xyz).project(this.camera);
+      rect = rect || this.canvas.getBoundingClientRect();
+      return { x: rect.left + (v.x + 1) / 2 * rect.width, y: rect.top + (1 - v.y) / 2 * rect.height };
+    }
+
+    // client coordinates of display vertex i (tests move the mouse there)
+    screenOf(i) { return this.screen([this.pos[3 * i], this.pos[3 * i + 1], this.pos[3 * i + 2]]); }
+
+    indexOfId(id, part) {
+      const [lo, hi] = part === undefined || !this.d.parts.length ? [0, this.n] : this.d.parts[part].slice(1);
+      for (let i = lo; i < hi; i++) if ((this.ids ? this.ids[i] : i) === id) return i;
+      return -1;
+    }
+
+    partName(i) {
+      for (const [name, lo, hi] of this.d.parts) if (i >= lo && i < hi) return name + " ";
+      return "";
+    }
+
+    vertexAt(x, y) {
+      const rect = this.canvas.getBoundingClientRect(), T = this.T;
+      const ndc = new T.Vector2((x - rect.left) / rect.width * 2 - 1, -((y - rect.top) / rect.height) * 2 + 1);
+      this.raycaster.setFromCamera(ndc, this.camera);
+      const hit = this.raycaster.intersectObject(this.object, false)[0];
+      if (!hit) return -1;
+      if (!this.faces) return hit.index;
+      let best = -1, bd = Infinity;
+      for (const v of [hit.face.a, hit.face.b, hit.face.c]) {
+        const dx = this.pos[3 * v] - hit.point.x, dy = this.pos[3 * v + 1] - hit.point.y, dz = this.pos[3 * v + 2] - hit.point.z;
+        const d = dx * dx + dy * dy + dz * dz;
+        if (d < bd) { bd = d; best = v; }
+      }
+      return best;
+    }
+
+    pick(i) { this.hovered = i; this.showHover(); this.draw(); }
+
+    showHover() {
+      const i = this.hovered, l = this.layers[this.current];
+      const at = (m, v) => { m.visible = v >= 0; if (v >= 0) m.position.set(this.pos[3 * v], this.pos[3 * v + 1], this.pos[3 * v + 2]); };
+      at(this.mark, i);
+      const j = i >= 0 && this.partner ? this.partner[i] : -1;
+      at(this.partnerMark, j);
+      if (i < 0) { this.hover.style.display = "none"; this.hover.removeAttribute("data-vertex"); return; }
+      const id = this.ids ? this.ids[i] : i;
+      let text = `${this.partName(i)}vertex ${id}`;
+      if (l.vals) text += `\n${l.value_name || "value"}: ${fmt(l.vals[i])}`;
+      if (j >= 0) text += `\n→ ${this.partName(j)}vertex ${this.ids ? this.ids[j] : j}`;
+      this.hover.textContent = text; this.hover.style.display = "block";
+      this.hover.setAttribute("data-vertex", String(id));
+    }
+
+    events() {
+      const c = this.canvas;
+      let drag = null, pending = false, last = null;
+      c.addEventListener("pointerdown", (e) => { drag = [e.clientX, e.clientY]; c.setPointerCapture(e.pointerId); });
+      c.addEventListener("pointerup", (e) => { drag = null; c.releasePointerCapture(e.pointerId); });
+      c.addEventListener("pointermove", (e) => {
+        if (drag) {
+          this.azim -= (e.clientX - drag[0]) * 0.4;
+          this.elev = Math.max(-90, Math.min(90, this.elev + (e.clientY - drag[1]) * 0.4));
+          drag = [e.clientX, e.clientY]; this.draw(); return;
+        }
+        last = [e.clientX, e.clientY];
+        if (!pending) {
+          pending = true;
+          requestAnimationFrame(() => { pending = false; const i = this.vertexAt(...last); if (i !== this.hovered) this.pick(i); });
+        }
+      });
+      c.addEventListener("pointerleave", () => { if (!drag) this.pick(-1); });
+      c.addEventListener("wheel", (e) => {
+        e.preventDefault(); this.zoom = Math.max(0.2, Math.min(50, this.zoom * Math.exp(-e.deltaY * 0.001))); this.draw();
+      }, { passive: false });
+      if (window.ResizeObserver) new ResizeObserver(() => this.draw()).observe(this.stage);
+    }
+  }
+
+  async function start() {
+    const api = window.shapecond;
+    try {
+      const src = document.getElementById("sc-three").textContent;
+      const T = await import(URL.createObjectURL(new Blob([src], { type: "text/javascript" })));
+      document.querySelectorAll(".sc-viewer").forEach((root) => {
+        const data = JSON.parse(root.querySelector("script.sc-data").textContent);
+        api.viewers.push(new Viewer(T, root, data));
+      });
+      api.ready = true;
+    } catch (err) {
+      api.error = String(err);
+      console.error("shapecond viewer: " + err);
+      document.querySelectorAll(".sc-viewer").forEach((r) => r.append(el("p", "sc-error",
+        "The 3D view could not start (" + err + "); a browser with WebGL 2 is needed.")));
+    }
+  }
+  window.shapecond = { viewers: [], ready: false, error: null };
+  if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start); else start();
+})();

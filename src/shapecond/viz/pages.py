@@ -1,0 +1,419 @@
+"""The HTML pages of the commands and results (``--html FILE``, ``result.to_html``, ``report.html``).
+
+Each function returns a complete self-contained document (``html.page``) built
+from the same scenes as the PNGs (``viz.scene``):
+
+* ``score_page``: the witness map (reference colours, their pull-back through
+  the witness, the moved samples as chords) and the scale-aware witness;
+* ``heatmap_page``: the score with each sample fixed, its colour scale and, on
+  hover, each vertex's id and (interpolated) value;
+* ``landmarks_page``: the landmarks in order with the score after each;
+* ``match_page``: the colour transfer source -> target through the map, the
+  landmarks linked, and the error field when the ground truth is given;
+* ``local_page``: the local score with each vertex fixed (the doubt field);
+* ``evaluation_page``: the evaluation report's text and plots, and a viewer per
+  class (the null shape with each method's landmarks).
+"""
+
+from __future__ import annotations
+
+import html as _html
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from .html import MAX_DISPLAY_VERTICES, page, summary, table, viewer
+from .scene import (DEFAULT_VIEWS, colour_layer, guess_up, heatmap_scene, landmark_scene, make_scene,
+                    position_colours, witness_scene)
+
+
+def _f(v) -> str:
+    if v is None:
+        return "-"
+    v = float(v)
+    return "inf" if math.isinf(v) else f"{v:.4g}"
+
+
+def _name(shape) -> str:
+    geom = getattr(shape, "geometry", None)
+    return getattr(geom, "name", None) or "a distance matrix"
+
+
+def score_page(result, title: str | None = None) -> str:
+    """Page of a ``ScoreResult``: witness map and scale-aware witness with the score's summary."""
+    shape, sc = result.shape, result.score
+    if getattr(shape, "geometry", None) is None:
+        note = "a distance matrix has no surface: its points are placed by classical MDS"
+    else:
+        note = None
+    scene = witness_scene(shape, sc.witness, landmarks=tuple(sc.landmarks), title=title)
+    layers = list(scene.layers)
+    if result.scale is not None:
+        wide = witness_scene(shape, result.scale.witness, landmarks=tuple(sc.landmarks)).layers[1]
+        from dataclasses import replace
+
+        layers.append(replace(wide, label=f"scale-aware witness, δ(ε) = {_f(result.scale.displacement)}"))
+    scene = scene.with_layers(layers)
+    if note:
+        from dataclasses import replace
+
+        scene = replace(scene, notes=(note,))
+    lo, hi = result.sigma
+    lines = [f"sigma    [{_f(lo)}, {_f(hi)}]   kappa [{_f(result.kappa[0])}, {_f(result.kappa[1])}]",
+             f"samples  N = {sc.n_points}, targets M = {sc.n_targets}",
+             f"landmarks {', '.join(map(str, result.landmarks)) or 'none'}",
+             f"verdict  {result.verdict}"]
+    body = [summary(lines), viewer(scene),
+            "<p>Row <b>reference</b>: every vertex coloured by its position. Row <b>witness</b>: every vertex "
+            "takes the reference colour of the image of its nearest sample under the witness map, the "
+            "near-isometry that makes the shape hard to match; chords join moved samples to their images. "
+            "Where the map is the identity the two agree; a mirror symmetry swaps left and right colours.</p>"]
+    return page(f"shapecond score: the witness map of {_name(shape)}", body)
+
+
+def heatmap_page(shape, values, *, landmarks=(), up=None, title=None, lines=(), cmap="turbo",
+                 colorbar_label="σ with the point fixed") -> str:
+    """Page of a heat map: ``values`` per sample (as ``render_heatmap_png``), ``lines`` of summary."""
+    scene = heatmap_scene(shape, values, landmarks=landmarks, up=up, title=title, cmap=cmap,
+                          colorbar_label=colorbar_label)
+    body = [summary(lines) if lines else "", viewer(scene),
+            "<p>Low values are good landmarks: fixing that point breaks the near-symmetries. Values are "
+            "computed at the samples and interpolated between them (hover shows the interpolated value).</p>"]
+    return page(f"shapecond heatmap: {_name(shape)}", body)
+
+
+def landmarks_page(shape, result, *, up=None, title=None) -> str:
+    """Page of a ``LandmarkResult`` on its ``MetricShape``: landmarks in order with the score after each."""
+    from .scene import shape_points
+
+    V, F, pts, ids = shape_points(shape)
+    verts = list(result.vertices) if shape.geometry is not None else [int(pts[i]) for i in result.sample_indices]
+    name = "δ(ε)" if result.score == "scale" else "σ"
+    notes = [f"{name} after: {_f(s)}" for s in result.scores] if result.scores else ()
+    scene = landmark_scene(V, F, verts, ids=ids, up=up or guess_up(shape.geometry), title=title, notes=notes,
+                           label=f"{result.method} landmarks")
+    rows = [(i + 1, v, _f(s) if i < len(result.scores) else "-")
+            for i, (v, s) in enumerate(zip(result.landmarks, list(result.scores) + [None] * len(result.landmarks)))]
+    body = [summary([f"method {result.method}, {shape.n_samples} samples, {result.seconds:.2f} s",
+                     f"{name} without these landmarks: {_f(result.initial_score)}"]),
+            viewer(scene), table(["#", "vertex id", f"{name} after"], rows)]
+    return page(f"shapecond landmarks: {result.method} on {_name(shape)}", body)
+
+
+def local_page(geometry, heatmap, fixed=(), *, result=None, title=None) -> str:
+    """Page of the local score's doubt field: σ_∞ with each vertex fixed (``deformation.heatmap``)."""
+    vals = np.asarray(heatmap.values, dtype=float)
+    finite = vals[np.isfinite(vals)]
+    top = float(finite.max()) if finite.size else 1.0
+    layer = colour_layer(np.where(np.isfinite(vals), vals, top), len(vals), "viridis", hover=vals,
+                         colorbar_label="σ_inf with the vertex fixed", value_name="σ_inf with the vertex fixed",
+                         landmarks=[int(v) for v in fixed], label="doubt field")
+    scene = make_scene(geometry.vertices, geometry.faces, [layer], up=guess_up(geometry), ids=geometry.ids,
+                       title=title)
+    lines = [] if result is None else [f"local score σ_inf {_f(result.score)}, λ_min {_f(result.lambda_min)}",
+                                       f"zero modes: {', '.join(result.zero_modes) or 'none'}"]
+    body = [summary(lines) if lines else "", viewer(scene),
+            "<p>Where fixing one more vertex would lower the local score most (low values: good landmarks "
+            "for deformation-based matching); modal approximation, infinite where zero modes remain "
+            "(drawn with the largest finite value).</p>"]
+    return page(f"shapecond local: {geometry.name}", body)
+
+
+# --- matching ---------------------------------------------------------------------------------
+
+def _pair(src, tgt):
+    """Display coordinates of two shapes side by side (the target beside the source along y)."""
+    from .scene import up_frame
+
+    out = []
+    for g in (src, tgt):
+        V = np.asarray(g.vertices, float)
+        out.append((V - V.mean(axis=0)) @ up_frame(guess_up(g), V).T)
+    a, b = out
+    gap = 0.15 * max(np.ptp(a[:, 1]), np.ptp(b[:, 1]))
+    b = b + np.array([0.0, a[:, 1].max() - b[:, 1].min() + gap, 0.0])
+    return a, b
+
+
+def match_errors(src, tgt, vmap, truth, n_points: int = 200, backend: str = "heat") -> tuple:
+    """Error field of a dense map (internal ids): per source vertex, % of half the target's diameter.
+
+    The geodesic distance on the target between the matched and the true vertex is
+    measured at ``n_points`` farthest-point samples of the source (Euclidean FPS) and
+    interpolated between them as heat maps are (``viz.heatmap.idw``).  Returns
+    (field, errors at the samples, sample vertices).
+    """
+    from ..matching.metrics import errors_from_rows, normalise
+    from ..shapes.geodesics import DistanceSolver
+    from ..shapes.sampling import farthest_point_sampling
+    from .heatmap import idw
+
+    k = min(int(n_points), src.n_vertices)
+    samples = np.asarray(farthest_point_sampling(DistanceSolver(src, "euclidean"), k, seed=0).samples, np.int64)
+    keep = (vmap[samples] >= 0) & (truth[samples] >= 0)
+    samples = samples[keep]
+    if not samples.size:
+        raise InputError("no source vertex has both a match and a ground-truth image")
+    rows = DistanceSolver(tgt, backend).distances(truth[samples])
+    raw = errors_from_rows(rows, vmap[samples])
+    err = normalise(raw, float(rows.max()) or 1.0)
+    return idw(np.asarray(src.vertices, float), samples, err), err, samples
+
+
+def _match_layers(src, tgt, vmap, a, b, lms, lmt, truth):
+    from scipy.spatial import cKDTree
+
+    n_s = src.n_vertices
+    ref = position_colours(np.asarray(src.vertices, float))
+    ok = np.flatnonzero(vmap >= 0)
+    _, near = cKDTree(np.asarray(tgt.vertices, float)[vmap[ok]]).query(np.asarray(tgt.vertices, float))
+    colours = np.vstack([ref, ref[ok[near]]])  # each target vertex: colour of the source vertex mapped nearest
+    marks = [int(v) for v in lms] + [n_s + int(v) for v in lmt]
+    ranks = tuple(range(len(lms))) * 2
+    seg = np.stack([a[list(lms)], b[list(lmt)]], axis=1) if len(lms) else None
+    layers = [colour_layer(colours, len(colours), landmarks=marks, ranks=ranks, segments=seg,
+                           label="colour transfer source → target")]
+    notes = []
+    if truth is not None:
+        field, err, samples = match_errors(src, tgt, vmap, truth)
+        top = float(err.max()) if err.size else 1.0
+        full = np.concatenate([field, np.full(tgt.n_vertices, np.nan)])
+        lay = colour_layer(np.where(np.isfinite(full), full, 0.0), len(full), "magma_r", 0.0, top or 1.0,
+                           hover=full, value_name="error, % of half the target's diameter",
+                           colorbar_label="error, % of half the target's diameter", landmarks=marks, ranks=ranks,
+                           segments=seg, label="error field (on the source)")
+        lay.rgba[n_s:] = (0.75, 0.75, 0.75, 1.0)
+        layers.append(lay)
+        notes.append(f"error field: geodesic distance on the target between the matched and the true vertex, "
+                     f"measured at {samples.size} source samples (mean {np.mean(err):.3g} %, median "
+                     f"{np.median(err):.3g} %) and interpolated between them")
+    return layers, notes
+
+
+def match_page(src, tgt, vmap, landmarks_source=(), landmarks_target=(), *, truth=None, title=None,
+               lines=()) -> str:
+    """Page of a dense map between two Geometries; ``vmap``/``truth``: target internal index per source
+    internal index (-1: none); landmarks as internal indices.  Source left, target right."""
+    from dataclasses import replace
+
+    if not (getattr(src, "vertices", None) is not None and getattr(tgt, "vertices", None) is not None):
+        raise InputError("a map between distance matrices has no surface to draw")
+    vmap = np.asarray(vmap, dtype=np.int64)
+    a, b = _pair(src, tgt)
+    layers, notes = _match_layers(src, tgt, vmap, a, b, landmarks_source, landmarks_target,
+                                  None if truth is None else np.asarray(truth, dtype=np.int64))
+    F = None
+    if src.faces is not None and tgt.faces is not None:
+        F = np.vstack([src.faces, tgt.faces + src.n_vertices])
+    elif src.faces is not None or tgt.faces is not None:
+        raise InputError("draw two meshes or two point clouds, not one of each")
+    n_s = src.n_vertices
+    scene = make_scene(np.vstack([a, b]), F, layers, up=None, ids=np.concatenate([src.ids, tgt.ids]), title=title,
+                       notes=notes)
+    scene = replace(scene, parts=(("source", 0, n_s), ("target", n_s, n_s + tgt.n_vertices)),
+                    partner=np.concatenate([np.where(vmap >= 0, vmap + n_s, -1), np.full(tgt.n_vertices, -1)]))
+    body = [summary(lines) if lines else "", viewer(scene, max(MAX_DISPLAY_VERTICES, 2 * 30_000)),
+            "<p>Left the source, coloured by position; right the target, each vertex coloured like the source "
+            "vertex mapped nearest to it: where the map is right the colours carry over smoothly. Landmarks "
+            "are numbered alike on both shapes and joined. Hover a source vertex: its image is marked on the "
+            "target.</p>"]
+    return page(f"shapecond match: {src.name} → {tgt.name}", body)
+
+
+# --- evaluation -----------------------------------------------------------------------------------
+
+def markdown_html(text: str, folder) -> str:
+    """The report's Markdown (headings, paragraphs, lists, tables, images) as HTML; images are inlined
+    from ``folder`` as data URIs (PNG)."""
+    import base64
+    import re
+
+    def inline(s):
+        s = _html.escape(s)
+        s = re.sub(r"`([^`]+)`", r"<code>\1</code>", s)
+        return re.sub(r"\*([^*\s][^*]*)\*", r"<em>\1</em>", s)
+
+    out, rows, items = [], [], []
+
+    def flush():
+        if rows:
+            cells = [[c.strip() for c in r.strip().strip("|").split("|")] for r in rows if not set(r) <= set("|-: ")]
+            out.append(table(cells[0], cells[1:]).replace("<td>", "<td>"))
+            rows.clear()
+        if items:
+            out.append("<ul>" + "".join(f"<li>{inline(i)}</li>" for i in items) + "</ul>")
+            items.clear()
+
+    for line in text.splitlines():
+        if line.startswith("|"):
+            rows.append(line)
+            continue
+        if line.startswith("- "):
+            items.append(line[2:])
+            continue
+        flush()
+        img = re.fullmatch(r"!\[([^\]]*)\]\(([^)]+)\)", line.strip())
+        if img:
+            p = Path(folder) / img.group(2)
+            if p.exists():
+                data = base64.b64encode(p.read_bytes()).decode("ascii")
+                out.append(f'<p><img alt="{_html.escape(img.group(1))}" src="data:image/png;base64,{data}"></p>')
+        elif line.startswith("## "):
+            out.append(f"<h2>{inline(line[3:])}</h2>")
+        elif line.startswith("# "):
+            continue  # the page's own title
+        elif line.strip():
+            out.append(f"<p>{inline(line)}</p>")
+    flush()
+    return "\n".join(out)
+
+
+def class_scene(geometry, sets: dict, scores: dict, cls: str):
+    """The null shape of a class with one layer per landmark method (``sets[method]`` internal vertices,
+    ``scores[method]`` {count: score})."""
+    layers = []
+    for method, verts in sets.items():
+        sc = scores.get(method, {})
+        notes = tuple(f"σ after {i + 1}: {_f(sc[i + 1])}" if (i + 1) in sc else "" for i in range(len(verts)))
+        layers.append(dict(values=None, landmarks=list(verts), notes=notes, label=method))
+    return make_scene(geometry.vertices, geometry.faces, layers, up=guess_up(geometry), ids=geometry.ids,
+                      views=DEFAULT_VIEWS, title=f"{cls}: null shape with each method's landmarks")
+
+
+def evaluation_page(ev, folder, text: str, max_vertices: int = 15_000) -> str:
+    """``report.html``: the report's Markdown ``text`` (tables, plots from ``folder``) and a viewer per class."""
+    from ..matching.evaluation import class_shapes, find_classes
+    from ..matching.report import score_table
+    from ..shapes.io import load_geometry
+
+    body = [markdown_html(text, folder), "<h2>Landmarks on the null shapes</h2>"]
+    scores = score_table(ev.landmarks)
+    try:
+        found = find_classes(Path(ev.settings["dataset"]), ev.settings["classes"])
+    except (InputError, OSError, KeyError):
+        found = {}
+    for cls in ev.settings["classes"]:
+        if cls not in found:
+            body.append(f"<p>{_html.escape(cls)}: the class folder is not readable any more; no viewer.</p>")
+            continue
+        g = load_geometry(class_shapes(found[cls])[0])
+        sets = {d["method"]: d["vertices"] for d in ev.landmarks if d["cls"] == cls}
+        body.append(viewer(class_scene(g, sets, {m: scores.get((cls, m), {}) for m in sets}, cls), max_vertices,
+                           heading=cls))
+    return page("Landmark evaluation (paper Section 7, Figure 7)", body)
+
+
+def demo_page(shape, score, small, values, chosen) -> str:
+    """``demo.html`` of ``shapecond demo``: the witness map, the heat map and the CNBS landmarks."""
+    witness = witness_scene(shape, score.witness, up="y", title="the witness map of the symmetry score")
+    heat = heatmap_scene(small, values, up="y", title="σ with each point fixed (CNBS heat map)")
+    g = small.geometry
+    notes = [f"σ after: {_f(s)}" for s in chosen.scores]
+    marks = landmark_scene(g.vertices, g.faces, [int(small.samples[i]) for i in chosen.sample_indices], ids=g.ids,
+                           up="y", title="three CNBS landmarks", notes=notes)
+    lo, hi = score.sigma_lower, score.sigma_upper
+    body = [summary([f"sigma [{_f(lo)}, {_f(hi)}] on demo:animal ({g.n_vertices} vertices, N = {shape.n_points})",
+                     f"CNBS landmarks (N = {small.n_points}): {', '.join(map(str, chosen.landmarks))}"]),
+            viewer(witness, heading="Witness map"), viewer(heat, heading="Heat map"),
+            viewer(marks, heading="Landmarks")]
+    return page("shapecond demo: the generated animal", body)
+
+
+# --- results of the Python interface ------------------------------------------------------------
+
+def result_page(result, **kw) -> str:
+    """The page of a result of ``shapecond``'s functions (score, heatmap, landmarks, match, local_score)."""
+    kind = type(result).__name__
+    if kind == "ScoreResult":
+        return score_page(result, **kw)
+    if kind == "HeatMapResult":
+        return heatmap_page(result.shape, result.plot_values(), landmarks=range(len(result.landmarks)),
+                            lines=[f"{result.score} before: {_f(result.sigma_before)}; best landmark: vertex "
+                                   f"{result.best} ({_f(result.best_value)})"], **kw)
+    if kind == "LandmarkResult":
+        if getattr(result, "shape", None) is None:
+            raise InputError("this LandmarkResult does not know its shape; use shapecond.landmarks()")
+        return landmarks_page(result.shape, result, **kw)
+    if kind == "MatchResult":
+        return _match_result_page(result, **kw)
+    if kind == "LocalScore":
+        return _local_result_page(result, **kw)
+    raise InputError(f"no HTML page for a {kind}")
+
+
+def _match_result_page(result, truth=None, **kw) -> str:
+    drawing = getattr(result, "drawing", None)
+    if drawing is None:
+        raise InputError("a map between distance matrices has no surface to draw")
+    src, tgt, ls, lt = drawing
+    vmap = np.full(src.n_vertices, -1, dtype=np.int64)
+    ok = result.map[src.ids] >= 0
+    vmap[ok] = tgt.to_internal(result.map[src.ids][ok])
+    t = None
+    if truth is not None:
+        if isinstance(truth, str) and truth == "same-ids":
+            truth = np.arange(int(src.ids.max()) + 1)
+        truth = np.asarray(truth)
+        if truth.ndim != 1 or truth.size <= int(src.ids.max()) or not np.issubdtype(truth.dtype, np.integer):
+            raise InputError(f"the ground truth needs one target vertex id per source vertex id "
+                             f"(0..{int(src.ids.max())}), got {truth.shape[0] if truth.ndim else 0}")
+        t = np.full(src.n_vertices, -1, dtype=np.int64)
+        known = truth[src.ids] >= 0  # -1: a source vertex without a true image
+        t[known] = tgt.to_internal(truth[src.ids][known])
+    s = result.summary
+    lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
+    return match_page(src, tgt, vmap, ls, lt, truth=t, lines=lines, **kw)
+
+
+def _local_result_page(result, **kw) -> str:
+    from ..deformation.heatmap import local_heatmap
+    from ..deformation.local_score import LocalProblem
+
+    drawing = getattr(result, "drawing", None)
+    if drawing is None:
+        raise InputError("this LocalScore does not know its mesh; use shapecond.local_score()")
+    g, settings = drawing
+    problem = LocalProblem(g.vertices, g.faces, alpha=settings["alpha"], energy=settings["energy"])
+    fixed = g.to_internal(result.landmarks)
+    hm = local_heatmap(problem, fixed, zero_tol=settings["zero_tol"])
+    return local_page(g, hm, fixed, result=result, **kw)
+
+
+def write_result(result, path, **kw) -> str:
+    """Write ``result_page(result)`` to ``path`` atomically; return the path."""
+    from ..output import write_text
+
+    return str(write_text(path, result_page(result, **kw)))
+
+
+def inline_result(result, height: int = 640):
+    """``_repr_html_`` of a result: its page in an iframe, or None when it has nothing to draw."""
+    from .html import inline
+
+    try:
+        return inline(result_page(result), height)
+    except InputError:
+        return None
+
+
+def read_truth(spec):
+    """``--truth``: None, ``"same-ids"``, or a map file (line i: the target vertex id of source vertex i)."""
+    if spec is None or spec == "same-ids":
+        return spec
+    try:
+        truth = np.loadtxt(spec, dtype=np.int64, ndmin=1)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{spec}: not a ground-truth map (one integer target vertex id per line): "
+                         f"{str(exc).splitlines()[0][:80]}") from None
+    if truth.ndim != 1:
+        raise InputError(f"{spec}: a ground-truth map has one id per line")
+    return truth
+
+
+def write_evaluation_html(ev, folder, text: str) -> str:
+    """Write ``report.html`` (``evaluation_page``) into ``folder`` atomically; return its path."""
+    from ..output import write_text
+
+    return str(write_text(Path(folder) / "report.html", evaluation_page(ev, folder, text)))

@@ -1,0 +1,328 @@
+"""Render data: what a picture shows, computed once for the PNG, the PLY and the HTML viewer.
+
+A :class:`Scene` is one shape in display coordinates (centred, its vertical axis
+turned to z, see ``display_frame``) with one or more :class:`Layer` colourings:
+per-vertex RGBA colours, the values behind them (for a colour bar and for the
+HTML viewer's hover read-out), landmarks in order with their marker colours and
+labels, and segments (the witness map's moves).  ``render.render_scene`` draws a
+Scene with matplotlib; ``html.scene_html`` embeds the same Scene in a page.
+Colours, views, landmark styles, labels and shading constants are defined here
+only, so the two kinds of picture cannot drift apart.
+
+The builders ``heatmap_scene``, ``witness_scene`` and ``landmark_scene`` compute the
+scenes of ``shapecond heatmap``, ``score --witness-png`` and ``landmarks``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import matplotlib
+import numpy as np
+
+from ..errors import InputError
+
+#: Default views as (elevation, azimuth) in degrees around the up axis: three-quarter
+#: front, both sides (a mirror ambiguity shows up as a left/right difference) and top.
+DEFAULT_VIEWS = ((20.0, -60.0), (5.0, 0.0), (5.0, 180.0), (80.0, 0.0))
+#: Headlight shading of a face: ``AMBIENT + DIFFUSE |n·v|`` (n the face normal, v the view direction).
+AMBIENT, DIFFUSE = 0.35, 0.65
+#: Landmark markers (paper Figure 6): the first three red, the rest green; RGB in [0, 1].
+LANDMARK_FIRST, LANDMARK_REST = (230 / 255, 20 / 255, 20 / 255), (30 / 255, 200 / 255, 30 / 255)
+#: Colour of a vertex without values.
+GREY = (0.75, 0.75, 0.75)
+#: A landmark is drawn as facing the viewer while ``normal · toward > FACING`` (hollow marker otherwise).
+FACING = -0.2
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def view_label(elev: float, azim: float) -> str:
+    """Caption of a view (PNG panel title, HTML button)."""
+    return f"elev {elev:g}°, azim {azim:g}°"
+
+
+def landmark_colour(i: int) -> tuple:
+    """RGB of the ``i``-th landmark (0-based): red for the first three, green after."""
+    return LANDMARK_FIRST if i < 3 else LANDMARK_REST
+
+
+@dataclass(frozen=True)
+class ColourBar:
+    """A scalar colour scale: ``cmap`` from ``lo`` to ``hi``, with its caption."""
+
+    cmap: str
+    lo: float
+    hi: float
+    label: str | None = None
+
+    def mappable(self):
+        """matplotlib ScalarMappable of this scale (the one colour mapping of shapecond)."""
+        norm = matplotlib.colors.Normalize(self.lo, self.hi)
+        return matplotlib.cm.ScalarMappable(norm=norm, cmap=self.cmap)
+
+    def stops(self, k: int = 33) -> list:
+        """``k`` colours evenly spaced from ``lo`` to ``hi`` as ``#rrggbb`` (for a CSS gradient)."""
+        rgba = self.mappable().to_rgba(np.linspace(self.lo, self.hi, k))
+        return [matplotlib.colors.to_hex(c) for c in rgba]
+
+
+@dataclass(frozen=True, eq=False)
+class Layer:
+    """One colouring of a scene's vertices.
+
+    Attributes
+    ----------
+    rgba : (n, 4) float array in [0, 1]
+    label : caption of the layer (a PNG row's caption, an HTML button)
+    values : (n,) per-vertex values read out on hover, or None
+    value_name : what ``values`` are
+    colorbar : ColourBar or None (direct colours)
+    landmarks : vertex indices of the scene, in order (markers numbered from 1)
+    notes : one text per landmark (e.g. its score), or empty
+    segments : (k, 2, 3) display coordinates of moves drawn as chords, or None
+    ranks : place of each landmark in its order (colour and number), default 0, 1, 2, ...
+        (two shapes side by side list the same ranks twice)
+    """
+
+    rgba: np.ndarray
+    label: str | None = None
+    values: np.ndarray | None = None
+    value_name: str | None = None
+    colorbar: ColourBar | None = None
+    landmarks: tuple = ()
+    notes: tuple = ()
+    segments: np.ndarray | None = None
+    ranks: tuple = ()
+
+    def rank(self, i: int) -> int:
+        """Place in the landmark order of the ``i``-th marker (0-based)."""
+        return int(self.ranks[i]) if self.ranks else i
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """One shape (or several side by side) in display coordinates with its layers.
+
+    Attributes
+    ----------
+    vertices : (n, 3) display coordinates (``(x - centre) @ frame.T``: centred, up = z)
+    faces : (m, 3) int array or None (a point cloud)
+    layers : tuple of Layer
+    ids : (n,) the id shown for each vertex (the input's vertex ids)
+    views : (elevation, azimuth) pairs in degrees (``render.view_rotation``)
+    title : str or None
+    centre, frame : the map from input to display coordinates
+    point_size : marker size of a point cloud in the PNG
+    parts : ((name, start, stop), ...) vertex ranges of several shapes; empty for one
+    partner : (n,) vertex index each vertex is linked to (-1: none), or None
+    normals : (n, 3) unit vertex normals (meshes) or None
+    notes : lines printed with the picture
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray | None
+    layers: tuple
+    ids: np.ndarray
+    views: tuple = DEFAULT_VIEWS
+    title: str | None = None
+    centre: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    frame: np.ndarray = field(default_factory=lambda: np.eye(3))
+    point_size: float = 6.0
+    parts: tuple = ()
+    partner: np.ndarray | None = None
+    normals: np.ndarray | None = None
+    notes: tuple = ()
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.vertices.shape[0])
+
+    def to_display(self, points) -> np.ndarray:
+        """Input coordinates (k, 3) to display coordinates."""
+        return (np.asarray(points, dtype=float) - self.centre) @ self.frame.T
+
+    def with_layers(self, layers) -> "Scene":
+        return replace(self, layers=tuple(layers))
+
+
+def up_frame(up: str, V: np.ndarray | None = None) -> np.ndarray:
+    """Rotation taking the data's ``up`` axis to z (rows: new x, y, z axes).
+
+    Of the two horizontal axes, the one along which the shape is longer becomes the
+    new y, so that azimuth 0 and 180 look at the shape's broad sides (an animal's
+    flanks, a standing human's front and back) whatever the file's convention.
+    """
+    if up not in _AXES:
+        raise InputError(f"up axis must be one of x, y, z, got {up!r}")
+    k = _AXES[up]
+    z = np.eye(3)[k]
+    a, b = np.eye(3)[(k + 1) % 3], np.eye(3)[(k + 2) % 3]
+    if V is not None and np.ptp(V @ a) > np.ptp(V @ b):
+        a, b = b, a
+    y = b
+    x = np.cross(y, z)
+    return np.stack([x, y, z])
+
+
+def guess_up(geometry) -> str:
+    """Vertical axis of a shape: ``"y"`` for the generated animal, ``"z"`` otherwise (TOSCA)."""
+    return "y" if getattr(geometry, "name", "") == "animal" else "z"
+
+
+def colour_layer(data, n: int, cmap: str = "viridis", vmin=None, vmax=None, *, hover=None, **kw) -> Layer:
+    """A Layer coloured by ``data``: None (grey), (n,) scalars through ``cmap`` or (n, 3|4) colours.
+
+    Scalars get a ColourBar from ``vmin``/``vmax`` (default: their finite range;
+    non-finite values take the top colour).  ``hover``: the values read out on
+    hover (default: the scalars themselves).  ``kw`` are the other Layer fields
+    (``label``, ``landmarks``, ``value_name``, ...) and ``colorbar_label``.
+    """
+    label = kw.pop("colorbar_label", None)
+    if hover is not None:
+        kw["values"] = np.asarray(hover, dtype=float)
+    if data is None:
+        return Layer(np.tile([*GREY, 1.0], (n, 1)), **kw)
+    v = np.asarray(data, dtype=float)
+    if v.ndim == 2 and v.shape[0] == n and v.shape[1] in (3, 4):
+        rgba = np.ones((n, 4))
+        rgba[:, : v.shape[1]] = np.clip(v, 0.0, 1.0)
+        return Layer(rgba, **kw)
+    if v.shape != (n,):
+        raise InputError(f"values must have shape ({n},), ({n}, 3) or ({n}, 4), got {v.shape}")
+    finite = v[np.isfinite(v)]
+    lo = float(np.min(finite)) if vmin is None and finite.size else (vmin if vmin is not None else 0.0)
+    hi = float(np.max(finite)) if vmax is None and finite.size else (vmax if vmax is not None else 1.0)
+    if hi <= lo:
+        hi = lo + 1.0
+    bar = ColourBar(cmap, float(lo), float(hi), label)
+    rgba = np.asarray(bar.mappable().to_rgba(np.where(np.isfinite(v), v, hi)), dtype=float)
+    kw.setdefault("values", v)
+    return Layer(rgba, colorbar=bar, **kw)
+
+
+def make_scene(vertices, faces, layers, *, up: str | None = "z", ids=None, views=DEFAULT_VIEWS, **meta) -> Scene:
+    """A Scene of one shape given in input coordinates (checked; landmarks must be vertex indices).
+
+    ``meta``: the Scene's ``title``, ``notes`` and ``point_size`` (default 6, or 30 for
+    a point cloud of at most 2000 points).
+
+    ``layers`` are Layers, or dicts of ``colour_layer`` arguments (``values``,
+    ``cmap``, ``vmin``, ``vmax``, ``colorbar_label``, ``label``, ``landmarks``,
+    ``notes``, ``segments`` in input coordinates).  ``up=None``: the vertices are
+    display coordinates already (kept as they are).
+    """
+    from ..deformation.energy import vertex_normals
+
+    V = np.asarray(vertices, dtype=float)
+    if V.ndim != 2 or V.shape[1] != 3 or V.shape[0] == 0:
+        raise InputError("vertices must be a non-empty (n, 3) array")
+    n = V.shape[0]
+    F = None if faces is None else np.asarray(faces, dtype=np.int64)
+    if F is not None and (F.ndim != 2 or F.shape[1] != 3 or (F.size and (F.min() < 0 or F.max() >= n))):
+        raise InputError("faces must be an (m, 3) array of vertex indices")
+    if not views:
+        raise InputError("at least one view is needed")
+    centre, frame = (np.zeros(3), np.eye(3)) if up is None else (V.mean(axis=0), up_frame(up, V))
+    D = (V - centre) @ frame.T
+    out = []
+    for lay in layers:
+        if isinstance(lay, dict):
+            lay = dict(lay)
+            seg = lay.pop("segments", None)
+            lay = colour_layer(lay.pop("values", None), n, lay.pop("cmap", "viridis"), lay.pop("vmin", None),
+                               lay.pop("vmax", None), **lay)
+            if seg is not None:
+                seg = np.asarray(seg, dtype=float).reshape(-1, 2, 3)
+                lay = replace(lay, segments=(seg - centre) @ frame.T)
+        lms = tuple(int(v) for v in lay.landmarks)
+        if any(v < 0 or v >= n for v in lms):
+            raise InputError("landmark vertex index out of range")
+        out.append(replace(lay, landmarks=lms))
+    point_size = meta.pop("point_size", None)
+    if point_size is None:
+        point_size = 6.0 if F is not None or n > 2000 else 30.0
+    meta["notes"] = tuple(meta.get("notes", ()))
+    return Scene(D, F, tuple(out), np.arange(n) if ids is None else np.asarray(ids, dtype=np.int64),
+                 tuple(tuple(float(a) for a in v) for v in views), centre=centre, frame=frame,
+                 point_size=float(point_size), normals=None if F is None else vertex_normals(D, F), **meta)
+
+
+# --- the scenes of the commands ----------------------------------------------------------
+
+def shape_points(shape):
+    """(vertices, faces, vertex of each point of Y, ids) of a MetricShape; classical MDS for a matrix."""
+    from ..symmetry.starts import classical_mds
+
+    geom = getattr(shape, "geometry", None)
+    if geom is not None and getattr(shape, "samples", None) is not None:
+        V = np.asarray(geom.vertices, float)
+        ids = getattr(geom, "ids", None)  # a stand-in without ids: the row indices
+        return (V, geom.faces, np.asarray(shape.samples, np.int64),
+                np.arange(len(V)) if ids is None else np.asarray(ids, np.int64))
+    V = classical_mds(np.asarray(shape.D, float))
+    return V, None, np.arange(V.shape[0]), np.arange(V.shape[0])
+
+
+def heatmap_scene(shape, values, *, landmarks=(), up=None, method="smooth", cmap="turbo",
+                  colorbar_label="σ with the point fixed", log=None, **place) -> Scene:
+    """The heat map of ``viz.heatmap.render_heatmap_png`` as a Scene (see there for the arguments);
+    ``place``: ``views`` and ``title`` (``make_scene``)."""
+    from .heatmap import interpolate_to_vertices
+
+    V, F, pts, ids = shape_points(shape)
+    vv = interpolate_to_vertices(shape, values, method=method)
+    finite = vv[np.isfinite(vv)]
+    vmax = float(finite.max()) if finite.size else 1.0
+    vv = np.where(np.isfinite(vv), vv, vmax)
+    if log is None:  # auto: a wide range (one near-symmetry left) would flatten everything else
+        log = finite.size > 0 and finite.min() > 0 and vmax / finite.min() > 20.0
+    shown = np.log10(vv) if log else vv
+    label = f"log10 {colorbar_label}" if log else colorbar_label
+    lm = [int(pts[int(i)]) for i in landmarks]
+    layer = colour_layer(shown, len(V), cmap, colorbar_label=label, landmarks=lm, hover=vv,
+                         value_name=colorbar_label)
+    return make_scene(V, F, [layer], up=up or guess_up(getattr(shape, "geometry", None)), ids=ids, **place)
+
+
+def position_colours(V: np.ndarray) -> np.ndarray:
+    """RGB in [0.1, 0.95] from coordinates normalised to the bounding box."""
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    c = (V - lo) / np.where(hi > lo, hi - lo, 1.0)
+    return 0.1 + 0.85 * c
+
+
+def witness_scene(shape, witness, *, landmarks=(), up=None, views=DEFAULT_VIEWS, max_segments: int = 80,
+                  title=None) -> Scene:
+    """The two rows of ``viz.witness.render_witness_png`` (reference colours, their pull-back) as a Scene."""
+    from scipy.spatial import cKDTree
+
+    D = np.asarray(shape.D, dtype=float)
+    n = int(shape.n_samples)
+    t = np.asarray(witness, dtype=np.int64)
+    if t.shape != (n,) or t.min() < 0 or t.max() >= D.shape[0]:
+        raise InputError(f"witness must be {n} indices into range({D.shape[0]})")
+    V, F, pts, ids = shape_points(shape)
+    ref = position_colours(V)
+    _, near = cKDTree(V[pts[:n]]).query(V)  # every vertex -> nearest sample of X (colouring only)
+    disp = D[np.arange(n), t]
+    order = np.argsort(-disp, kind="stable")[:max_segments]
+    order = order[disp[order] > 0]
+    segments = np.stack([V[pts[order]], V[pts[t[order]]]], axis=1)
+    lm = [int(pts[int(i)]) for i in landmarks]
+    moved = int(np.count_nonzero(disp > 0))
+    target_id = ids[pts[t[near]]]
+    layers = [dict(values=ref, landmarks=lm, label="reference (colour = position)"),
+              dict(values=ref[pts[t[near]]], landmarks=lm, segments=segments,
+                   label=f"witness T ({moved}/{n} samples moved)")]
+    scene = make_scene(V, F, layers, up=up or guess_up(getattr(shape, "geometry", None)), ids=ids, views=views,
+                       title=title)
+    # hover read-out of the witness layer: where the nearest sample is sent (input id)
+    wit = replace(scene.layers[1], values=target_id.astype(float), value_name="nearest sample sent to vertex")
+    return scene.with_layers([scene.layers[0], wit])
+
+
+def landmark_scene(V, F, landmarks, *, notes=(), label="landmarks", **place) -> Scene:
+    """A grey shape with landmarks in order; ``notes``: one text per landmark (e.g. the score after it);
+    ``place``: ``up``, ``ids``, ``views``, ``title`` (``make_scene``)."""
+    return make_scene(V, F, [dict(landmarks=landmarks, notes=tuple(notes), label=label)], **place)

@@ -1,0 +1,295 @@
+"""HTML pages (issue 26): self-contained, deterministic, built from the PNGs' scenes, and working in a
+real headless Chromium with the network blocked (the browser tests skip when Chromium or Playwright is
+missing)."""
+
+import hashlib
+import io
+import json
+import re
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import shapecond as sc
+from shapecond.errors import InputError
+from shapecond.shapes.synthetic import generate
+from shapecond.viz import html as H
+from shapecond.viz import pages
+from shapecond.viz.render import view_rotation
+from shapecond.viz.scene import heatmap_scene, make_scene
+
+from tests.conftest import run_cli
+
+SMALL = "demo:animal:resolution=0.05"
+
+
+def _data(document: str) -> list:
+    """The scenes embedded in a page."""
+    return [json.loads(m) for m in re.findall(r'<script type="application/json" class="sc-data">(.*?)</script>',
+                                              document, re.S)]
+
+
+def _front_vertex(data: dict, k: int = 0) -> int:
+    """The display vertex nearest the camera of view ``k`` (nothing can hide it), off the mesh's boundary
+    (a ray through a boundary vertex grazes the edge of its triangles)."""
+    import base64
+
+    P = np.frombuffer(base64.b64decode(data["positions"]), np.float32).reshape(-1, 3)
+    depth = P @ view_rotation(*data["views"][k])[2]
+    if data["faces"] is not None:
+        F = np.frombuffer(base64.b64decode(data["faces"]), np.uint32).reshape(-1, 3).astype(np.int64)
+        E = np.sort(np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+        edges, count = np.unique(E, axis=0, return_counts=True)
+        depth[np.unique(edges[count == 1])] = -np.inf
+    return int(np.argmax(depth))
+
+
+def _id(data: dict, i: int) -> int:
+    import base64
+
+    return i if data["ids"] is None else int(np.frombuffer(base64.b64decode(data["ids"]), np.int32)[i])
+
+
+@pytest.fixture(scope="module")
+def heat():
+    return sc.heatmap(SMALL, n_points=24, cache=False, effort="quick")
+
+
+# --- the file ----------------------------------------------------------------------------------
+
+def test_page_is_self_contained_and_deterministic(heat):
+    a, b = pages.result_page(heat), pages.result_page(heat)
+    assert a == b
+    # no script, style, image or frame is fetched: no src/href pointing anywhere
+    assert not re.search(r"<(script|link|img|iframe)[^>]*\b(src|href)\s*=", a, re.I)
+    assert not re.search(r"url\(\s*['\"]?https?:", a, re.I)
+    assert "</script" not in H.three_source().lower()
+    assert a.count('class="sc-data"') == 1
+
+
+def test_vendored_three_js_is_the_release_with_its_licence():
+    text = H.asset("three.module.min.js")
+    assert hashlib.sha256(text.encode()).hexdigest() == H.THREE_SHA256
+    assert f'const t="{H.THREE_VERSION.split(".")[1]}"' in text[:400]
+    licence = H.asset("three.LICENSE")
+    assert "MIT License" in licence and "three.js authors" in licence
+
+
+def test_html_shows_the_png_colours(heat):
+    """The viewer's colours are the scene's, which the PNG draws (one colour computation)."""
+    import base64
+
+    scene = heatmap_scene(heat.shape, heat.plot_values(), landmarks=range(len(heat.landmarks)))
+    data = H.scene_data(scene)
+    rgb = np.frombuffer(base64.b64decode(data["layers"][0]["colours"]), np.uint8).reshape(-1, 3)
+    assert np.array_equal(rgb, np.round(scene.layers[0].rgba[:, :3] * 255).astype(np.uint8))
+    bar = scene.layers[0].colorbar
+    assert data["layers"][0]["colorbar"]["stops"][0] == bar.stops()[0] and bar.cmap == "turbo"
+
+
+def test_decimation_keeps_ids_and_says_so():
+    g = generate("sphere", subdivisions=5)  # 10,242 vertices
+    ids = np.arange(g.n_vertices) * 3 + 7
+    scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 2], landmarks=[5, 9])], ids=ids)
+    small, note = H.decimate(scene, 2000)
+    assert 500 < small.n_vertices <= 2000 and "decimated from 10,242" in note
+    assert set(small.ids) <= set(ids) and small.faces.max() < small.n_vertices
+    assert H.decimate(scene, 20_000) == (scene, None)
+    data = H.scene_data(scene, 2000)
+    assert data["n"] == small.n_vertices and any("decimated" in n for n in data["notes"])
+
+
+def test_a_50k_vertex_page_is_a_few_mb():
+    g = generate("sphere", subdivisions=7)  # 163,842 vertices: decimated to 50k at most
+    scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 0])])
+    document = H.page("big", [H.viewer(scene)])
+    assert len(document.encode()) < 5e6
+    assert _data(document)[0]["n"] <= H.MAX_DISPLAY_VERTICES
+
+
+def test_bad_inputs_are_input_errors(tmp_path):
+    D = np.abs(np.subtract.outer(np.arange(8.0), np.arange(8.0)))
+    res = sc.match(D, D, [0, 7], [0, 7], matcher="faq")
+    with pytest.raises(InputError):
+        res.to_html(tmp_path / "x.html")
+    assert res._repr_html_() is None and not (tmp_path / "x.html").exists()
+    with pytest.raises(InputError):
+        pages.read_truth(str(tmp_path / "missing.txt"))
+
+
+def test_cli_html_options(tmp_path, capsys):
+    code, out, err = run_cli(capsys, "heatmap", SMALL, "-n", "16", "--effort", "quick", "--no-cache", "--html",
+                             tmp_path / "h.html", "--json")
+    assert code == 0 and json.loads(out)["best"] >= 0 and (tmp_path / "h.html").stat().st_size > 1e5
+    code, out, err = run_cli(capsys, "heatmap", SMALL, "-n", "16", "--no-cache")
+    assert code == 2 and err.startswith("error: ") and "--html" in err
+    code, out, err = run_cli(capsys, "match", SMALL, SMALL, "--landmarks-source", "0,50,300",
+                             "--landmarks-target", "0,50,300", "-n", "20", "--matcher", "faq", "--no-cache",
+                             "-o", tmp_path / "map.txt", "--truth", "same-ids")
+    assert code == 2 and "--html" in err
+
+
+# --- in a real browser ----------------------------------------------------------------------------
+
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--proxy-server=127.0.0.1:9", "--proxy-bypass-list=<-loopback>"]
+
+
+def _chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        if shutil.which(name):
+            return shutil.which(name)
+    return None
+
+
+@pytest.fixture(scope="module")
+def browser():
+    sync = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (the 'test' extra)")
+    exe = _chromium()
+    if exe is None:
+        pytest.skip("no Chromium on this machine (apt-get install chromium)")
+    with sync.sync_playwright() as p:
+        with tempfile.TemporaryDirectory() as profile:
+            ctx = p.chromium.launch_persistent_context(profile, executable_path=exe, args=CHROMIUM_ARGS,
+                                                       headless=True, viewport={"width": 1100, "height": 800})
+            yield ctx
+            ctx.close()
+
+
+def _open(ctx, path: Path):
+    """Open a page offline; return (page, console errors, network requests)."""
+    page = ctx.new_page()
+    errors, requests = [], []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("request", lambda r: requests.append(r.url))
+    page.route(re.compile(r"^(https?|wss?|ftp)://"), lambda route: route.abort())
+    page.goto(path.resolve().as_uri())
+    page.wait_for_function("window.shapecond && (window.shapecond.error || (window.shapecond.ready && "
+                           "window.shapecond.viewers.every(v => v.firstFrame !== null)))", timeout=20_000)
+    return page, errors, requests
+
+
+def _check(page, errors, requests, path: Path, k: int = 0):
+    """No error, nothing fetched, a drawn canvas, and the id of a known vertex on hover (viewer ``k``)."""
+    import matplotlib.image as mpimg
+
+    assert page.evaluate("window.shapecond.error") is None
+    assert not [u for u in requests if not u.startswith(("file:", "blob:", "data:"))]
+    canvas = page.locator("canvas").nth(k)
+    img = mpimg.imread(io.BytesIO(canvas.screenshot()), format="png")[..., :3]
+    assert img.std() > 0.05 and (img.max(axis=2) - img.min(axis=2)).max() > 0.2  # drawn, in colour
+    data = _data(path.read_text())[k]
+    i = _front_vertex(data)
+    canvas.scroll_into_view_if_needed()
+    xy = page.evaluate(f"window.shapecond.viewers[{k}].screenOf({i})")
+    page.mouse.move(xy["x"], xy["y"])
+    hover = page.locator(".sc-hover").nth(k)
+    hover.wait_for(state="visible", timeout=5_000)
+    assert hover.get_attribute("data-vertex") == str(_id(data, i))
+    assert f"vertex {_id(data, i)}" in hover.inner_text()
+    assert not errors, errors
+    return hover.inner_text()
+
+
+def test_browser_heatmap_page(browser, tmp_path):
+    # an unreferenced first vertex: the input's ids are 1..n, not the internal 0..n-1
+    g = generate("animal", resolution=0.05)
+    V = np.vstack([[9.0, 9.0, 9.0], g.vertices])
+    res = sc.heatmap((V, g.faces + 1), n_points=20, cache=False, effort="quick")
+    path = Path(res.to_html(tmp_path / "heat.html"))
+    page, errors, requests = _open(browser, path)
+    text = _check(page, errors, requests, path)
+    assert "σ with the point fixed" in text
+    assert page.locator(".sc-ramp").count() == 1
+
+
+def test_browser_score_and_landmarks_pages(browser, tmp_path):
+    res = sc.score(SMALL, n_points=20, landmarks=[0], cache=False, effort="quick")
+    path = Path(res.to_html(tmp_path / "score.html"))
+    page, errors, requests = _open(browser, path)
+    _check(page, errors, requests, path)
+    assert page.locator("button.sc-layer").count() == 3  # reference, witness, scale-aware witness
+    page.locator("button.sc-layer").nth(1).click()
+    assert page.evaluate("window.shapecond.viewers[0].current") == 1 and not errors
+    lm = sc.landmarks(SMALL, 4, "fps", n_points=20, cache=False, scores=True, effort="quick")
+    path = Path(lm.to_html(tmp_path / "lm.html"))
+    page, errors, requests = _open(browser, path)
+    _check(page, errors, requests, path)
+    assert page.locator(".sc-landmarks li").count() == 4 and "σ after" in page.locator(".sc-side").inner_text()
+
+
+def test_browser_match_page_with_errors(browser, tmp_path, capsys):
+    out = tmp_path / "match.html"
+    code, _, err = run_cli(capsys, "match", SMALL, "demo:animal:resolution=0.05,delta=0.1", "--landmarks-source",
+                           "0,50,300", "--landmarks-target", "0,50,300", "-n", "20", "--matcher", "faq",
+                           "--no-cache", "-o", tmp_path / "map.txt", "--html", out, "--truth", "same-ids")
+    assert code == 0, err
+    page, errors, requests = _open(browser, out)
+    text = _check(page, errors, requests, out)
+    assert text.startswith("source vertex") and "→ target vertex" in text
+    assert page.locator("button.sc-layer").count() == 2 and "error field" in out.read_text()
+
+
+def test_browser_local_page(browser, tmp_path, capsys):
+    out = tmp_path / "local.html"
+    code, _, err = run_cli(capsys, "local", "demo:blob:subdivisions=2", "-l", "0,5,40", "--html", out)
+    assert code == 0, err
+    page, errors, requests = _open(browser, out)
+    assert "σ_inf with the vertex fixed" in _check(page, errors, requests, out)
+
+
+def test_browser_decimated_page(browser, tmp_path):
+    g = generate("sphere", subdivisions=5)
+    scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 2])], ids=np.arange(g.n_vertices) + 100)
+    path = tmp_path / "dec.html"
+    H.write_page(path, "decimated", [H.viewer(scene, max_vertices=1500)])
+    page, errors, requests = _open(browser, path)
+    _check(page, errors, requests, path)
+    assert "decimated" in page.locator(".sc-notes").inner_text()
+
+
+def test_browser_evaluation_report(browser, tmp_path):
+    from shapecond.matching.evaluation import evaluate_dataset
+    from shapecond.matching.report import write_report
+    from shapecond.shapes.synthetic import plane_patch
+
+    root = tmp_path / "data"
+    (root / "strip").mkdir(parents=True)
+    g = plane_patch(n=13)
+    for k, bend in ((0, 0.0), (1, 0.2)):
+        V = g.vertices * [1.0, 0.55, 0.0] + [0.0, 0.0, bend] * (g.vertices[:, :1] ** 2)
+        with open(root / "strip" / f"strip{k}.off", "w") as f:
+            f.write(f"OFF\n{len(V)} {len(g.faces)} 0\n")
+            f.writelines(f"{x} {y} {z}\n" for x, y, z in V)
+            f.writelines(f"3 {a} {b} {c}\n" for a, b, c in g.faces)
+    ev = evaluate_dataset(root, methods=("fps", "hks"), matchers=("faq",), n_points=16, cache=False)
+    write_report(ev, tmp_path / "out")
+    path = tmp_path / "out" / "report.html"
+    document = path.read_text()
+    assert "<table>" in document and 'src="data:image/png;base64,' in document
+    page, errors, requests = _open(browser, path)
+    _check(page, errors, requests, path)
+    assert page.locator("button.sc-layer").count() == 2  # one colouring per method
+
+
+def test_browser_jupyter_inline_view(browser, tmp_path, heat):
+    """``_repr_html_`` is the page in a sandboxed iframe; the viewer starts inside it."""
+    snippet = heat._repr_html_()
+    assert snippet.startswith("<iframe srcdoc=") and "<script" not in snippet  # the page is escaped
+    path = tmp_path / "notebook.html"
+    path.write_text(f"<!DOCTYPE html><html><body><p>a notebook cell</p>{snippet}</body></html>")
+    page = browser.new_page()
+    errors = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.goto(path.as_uri())
+    page.wait_for_load_state("load")
+    frame = page.frames[1]  # another (opaque) origin: read from inside the frame
+    frame.wait_for_function("window.shapecond && (window.shapecond.ready || window.shapecond.error)",
+                            timeout=20_000)
+    assert frame.evaluate("window.shapecond.error") is None and frame.evaluate("window.shapecond.viewers.length") == 1
+    assert not errors
