@@ -7,6 +7,9 @@ bad value gets the same one-line ``InputError`` from both:
   overflow, booleans passed as numbers), :func:`check_seed`, :func:`check_choice`;
 * vertex ids: :func:`parse_ids` (``"3,5,9"``, a file of ids, or a sequence) and
   :func:`read_ids` (a file: first column of each line, as BIM ``.pid`` files);
+* files: :func:`open_regular` opens a file only if it is a regular file (a FIFO,
+  a device or a socket is refused before it is read, without blocking), and
+  optionally without following a symbolic link;
 * distance matrices: :func:`check_distance_matrix`, with the strictness of
   :func:`scipy.spatial.distance.is_valid_dm` (square, symmetric, zero diagonal)
   plus finite, real and non-negative entries;
@@ -24,15 +27,18 @@ Examples
 
 from __future__ import annotations
 
+import errno
 import math
 import numbers
+import os
+import stat
 import weakref
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.distance import is_valid_dm
 
-from .errors import InputError
+from .errors import InputError, OutputError
 
 #: Largest file of vertex ids read (a landmark file holds a few dozen lines).
 MAX_ID_FILE_BYTES = 16 * 2**20
@@ -228,6 +234,77 @@ def parse_ids(spec, name: str = "landmarks") -> list[int]:
             raise InputError(f"{name}: {_fmt(tok)} is not a vertex id "
                              "(expected e.g. 12,405,877 or a file of ids)") from None
     return check_ids(ids, name)
+
+
+# --- files -----------------------------------------------------------------------------
+
+def _kind_problem(mode: int) -> str | None:
+    """Why a file of this ``st_mode`` is not a regular file (None if it is one)."""
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "is a folder, not a file"
+    if stat.S_ISFIFO(mode):
+        return "is a FIFO (named pipe), not a regular file"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "is a device, not a regular file"
+    if stat.S_ISSOCK(mode):
+        return "is a socket, not a regular file"
+    return "is a symbolic link, which shapecond does not follow here"
+
+
+def open_regular(path, flags: int = os.O_RDONLY, *, follow_links: bool = True, create_mode: int = 0o644,
+                 output: bool = False) -> int:
+    """A descriptor of ``path`` opened with ``flags``, only if it is a regular file.
+
+    A folder, FIFO, device or socket is refused before anything is read from or
+    written to it: its kind is checked with ``stat`` before opening and with
+    ``fstat`` on the descriptor, which is opened with ``O_NONBLOCK`` (a FIFO
+    nobody writes to cannot make ``open`` block) and then made blocking.
+    ``follow_links=False`` refuses a symbolic link (``O_NOFOLLOW``): shapecond's
+    own files (batch tables, journals, locks, cache entries) are never reached
+    through one.
+
+    Parameters
+    ----------
+    path : str or path-like
+    flags : ``os.open`` flags, e.g. ``os.O_RDONLY`` or ``os.O_RDWR | os.O_CREAT``.
+    follow_links : open what a symbolic link points to (user inputs) or refuse the link.
+    create_mode : permissions of a file that ``O_CREAT`` creates (before the umask).
+    output : raise :class:`OutputError` ("cannot write") instead of :class:`InputError`.
+
+    Returns
+    -------
+    int : the descriptor (blocking); the caller closes it.
+    """
+    error, verb = (OutputError, "write") if output else (InputError, "read")
+    path = os.fspath(path)
+    try:
+        st = os.stat(path) if follow_links else os.lstat(path)
+    except FileNotFoundError:
+        st = None
+        if os.path.islink(path):
+            raise error(f"{path}: a symbolic link to a missing file ({os.readlink(path)})") from None
+        if not flags & os.O_CREAT:
+            raise error(f"{path}: no such file") from None
+    except OSError as exc:
+        raise error(f"{path}: cannot {verb} ({exc.strerror or exc})") from None
+    problem = None if st is None else _kind_problem(st.st_mode)
+    if problem:
+        raise error(f"{path}: {problem}")
+    nofollow = 0 if follow_links else getattr(os, "O_NOFOLLOW", 0)
+    try:
+        fd = os.open(path, flags | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0) | nofollow, create_mode)
+    except OSError as exc:  # changed since the check: a link (ELOOP), a socket (ENXIO), a folder
+        if exc.errno in (errno.ELOOP, errno.ENXIO, errno.EISDIR):
+            raise error(f"{path}: not a regular file") from None
+        raise error(f"{path}: cannot {verb} ({exc.strerror or exc})") from None
+    problem = _kind_problem(os.fstat(fd).st_mode)
+    if problem:
+        os.close(fd)
+        raise error(f"{path}: {problem}")
+    os.set_blocking(fd, True)
+    return fd
 
 
 # --- distance matrices ---------------------------------------------------------------
