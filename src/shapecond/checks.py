@@ -6,7 +6,8 @@ bad value gets the same one-line ``InputError`` from both:
 * numbers: :func:`check_int`, :func:`check_float` (ranges, NaN, infinities,
   overflow, booleans passed as numbers), :func:`check_seed`, :func:`check_choice`;
 * vertex ids: :func:`parse_ids` (``"3,5,9"``, a file of ids, or a sequence) and
-  :func:`read_ids` (a file: first column of each line, as BIM ``.pid`` files);
+  :func:`read_ids` (a file: every id on every line; ``ID 0 0 0`` is a BIM ``.pid``
+  vertex point);
 * files: :func:`open_regular` opens a file only if it is a regular file (a FIFO,
   a device or a socket is refused before it is read, without blocking), and
   optionally without following a symbolic link;
@@ -154,57 +155,88 @@ def check_landmark_count(k, n: int, fixed=()) -> list[int]:
     return fixed
 
 
-def read_ids(path, name: str | None = None) -> list[int]:
-    """Vertex ids from a text file: the first column of each non-empty line.
+def _id_value(token: str, where: str) -> int:
+    """One vertex id: a non-negative integer (``12`` or ``12.0``); fractions, words and NaN refused."""
+    try:
+        value = int(token, 10)
+    except ValueError:
+        try:
+            f = float(token)
+        except ValueError:
+            raise InputError(f"{where}: {_fmt(token)} is not a vertex id") from None
+        if not (math.isfinite(f) and f.is_integer()):
+            raise InputError(f"{where}: {_fmt(token)} is not an integer vertex id") from None
+        value = int(f)
+    if not 0 <= value <= MAX_ID:
+        raise InputError(f"{where}: {_fmt(token)} is not a vertex id (0 .. {MAX_ID})")
+    return value
 
-    ``#`` starts a comment; columns may be separated by spaces, tabs or commas.
-    Refuses binary content, non-integer, negative, huge or repeated ids, an empty
-    file and files larger than ``MAX_ID_FILE_BYTES``, naming the file and line.
+
+def _line_ids(tokens: list[str], where: str) -> list[int]:
+    """The ids of one line of an id file: every column, except that a BIM ``.pid`` vertex point
+    ``ID 0 0 0`` is ``ID`` (as ids it would repeat 0) and a BIM point inside a triangle
+    (``FACE b1 b2 b3`` with fractional barycentric coordinates) is refused."""
+    if len(tokens) == 4:
+        try:
+            rest = [float(t) for t in tokens[1:]]
+        except ValueError:
+            rest = None
+        if rest is not None and all(math.isfinite(v) for v in rest):
+            if rest == [0.0, 0.0, 0.0]:
+                return [_id_value(tokens[0], where)]
+            if not all(v.is_integer() for v in rest):
+                raise InputError(f"{where}: {_fmt(' '.join(tokens))} is a point inside a triangle (BIM barycentric "
+                                 "coordinates), not vertex ids; give vertex ids (a .pid vertex line is ID 0 0 0)")
+    return [_id_value(t, where) for t in tokens]
+
+
+def _id_tokens(line: str) -> list[str]:
+    """The columns of one line of ids: ``#`` starts a comment; spaces, tabs and commas separate."""
+    return line.split("#")[0].replace(",", " ").split()
+
+
+def read_ids(path, name: str | None = None) -> list[int]:
+    """Vertex ids from a text file: every id on every non-empty line, in order.
+
+    Ids are separated by spaces, tabs, commas or new lines (``1 2 3``, ``1,2,3``
+    and one id per line are the same file); ``#`` starts a comment.  A line
+    ``ID 0 0 0`` is a vertex point of the Blended Intrinsic Maps benchmark's
+    ``.pid`` files and gives ``ID``; a ``.pid`` point inside a triangle (fractional
+    barycentric coordinates) is refused.  Nothing is dropped: fractional,
+    negative, huge, repeated or non-numeric ids, binary content, an empty file,
+    a file that is not a regular file (FIFO, device) and files larger than
+    ``MAX_ID_FILE_BYTES`` are refused, naming the file and line.
     """
     path = Path(path)
     label = name or path.name
+    fd = open_regular(path)
     try:
-        size = path.stat().st_size
-        if not path.is_file():
-            raise InputError(f"{path}: not a regular file of vertex ids")
+        size = os.fstat(fd).st_size
         if size > MAX_ID_FILE_BYTES:
             raise InputError(f"{label}: {size / 2**20:.0f} MB is too large for a file of vertex ids "
                              f"(at most {MAX_ID_FILE_BYTES // 2**20} MB)")
-        data = path.read_bytes()
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            data = fh.read(MAX_ID_FILE_BYTES + 1)
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    finally:
+        os.close(fd)
     if b"\0" in data:
         raise InputError(f"{label}: binary data, not a text file of vertex ids")
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
-        raise InputError(f"{label}: not UTF-8 text, expected one vertex id per line") from None
+        raise InputError(f"{label}: not UTF-8 text, expected vertex ids") from None
     ids = []
     for k, line in enumerate(text.splitlines(), 1):
-        line = line.split("#")[0].replace(",", " ").split()
-        if not line:
-            continue
-        tok = line[0]
-        try:
-            value = int(tok, 10)
-        except ValueError:
-            try:
-                f = float(tok)
-            except ValueError:
-                raise InputError(f"{label}:{k}: {_fmt(tok)} is not a vertex id") from None
-            if not (math.isfinite(f) and f.is_integer()):
-                raise InputError(f"{label}:{k}: {_fmt(tok)} is not an integer vertex id") from None
-            value = int(f)
-        if not 0 <= value <= MAX_ID:
-            raise InputError(f"{label}:{k}: {_fmt(tok)} is not a vertex id (0 .. {MAX_ID})")
-        ids.append(value)
+        ids += _line_ids(_id_tokens(line), f"{label}:{k}")
     if not ids:
         raise InputError(f"{label}: no vertex ids found")
     return check_ids(ids, label)
 
 
 def parse_ids(spec, name: str = "landmarks") -> list[int]:
-    """Vertex ids from ``"3,5,9"``, the path of a file of ids, or a sequence of ints.
+    """Vertex ids from ``"3,5,9"`` (or ``"3 5 9"``), the path of a file of ids, or a sequence of ints.
 
     ``None`` and ``""`` give ``[]``.  A string naming an existing file is read with
     :func:`read_ids`.
@@ -223,14 +255,13 @@ def parse_ids(spec, name: str = "landmarks") -> list[int]:
     text = spec.strip()
     if not text:
         return []
-    if len(text) < 4096 and Path(text).is_file():
+    if len(text) < 4096 and os.path.lexists(text) and not os.path.isdir(text):
         return read_ids(text)
-    tokens = [t for t in text.replace(" ", "").split(",") if t]
     ids = []
-    for tok in tokens:
+    for tok in _id_tokens(text):
         try:
-            ids.append(int(tok, 10))
-        except ValueError:
+            ids.append(_id_value(tok, name))
+        except InputError:
             raise InputError(f"{name}: {_fmt(tok)} is not a vertex id "
                              "(expected e.g. 12,405,877 or a file of ids)") from None
     return check_ids(ids, name)
