@@ -47,6 +47,14 @@ def _ply_binary(V, F, n_faces_declared):
     return head + body
 
 
+def _sphere():
+    """(V, F) of a 162-vertex icosphere (enough vertices for ``match -n 30``)."""
+    import trimesh
+
+    s = trimesh.creation.icosphere(subdivisions=2)
+    return np.asarray(s.vertices), np.asarray(s.faces)
+
+
 def make_files(folder) -> dict:
     """Write every bad (and one good) file into ``folder``; return name -> path."""
     d = Path(folder)
@@ -81,6 +89,9 @@ def make_files(folder) -> dict:
         "off_disconnected.off": _off(np.vstack([V, V + 5]), np.vstack([F, F + 4])),
         "off_huge_scale.off": _off(V * 1e200, F),
         "off_tiny_scale.off": _off(V * 1e-200, F),
+        # a mesh scaled by 1e-25 and written with 10 decimals (trimesh's OFF export): every vertex at 0
+        "off_zero_size.off": _off(np.round(V * 1e-25, 10) + 0.0, F),
+        "off_zero_size_sphere.off": _off(np.round(_sphere()[0] * 1e-25, 10) + 0.0, _sphere()[1]),
         "ply_truncated.ply": _ply_ascii(V, F[:2], n_faces_declared=4),
         "ply_trailing.ply": _ply_ascii(V, F, extra="1 2 3\n"),
         "ply_binary_truncated.ply": _ply_binary(V, F[:1], 4),
@@ -163,7 +174,8 @@ BAD_DEMOS = ["demo:sphere:radius=0", "demo:sphere:radius=-1", "demo:sphere:radiu
 BAD_SHAPES = ["off_truncated_faces.off", "off_truncated_vertices.off", "off_trailing.off", "off_short_face.off",
               "off_words.off", "off_header_only.off", "off_not_off.off", "off_binary.off", "off_empty.off",
               "off_bad_index.off", "off_negative_counts.off", "off_nan.off", "off_zero_area.off",
-              "off_disconnected.off", "off_huge_scale.off", "off_tiny_scale.off", "ply_truncated.ply",
+              "off_disconnected.off", "off_huge_scale.off", "off_tiny_scale.off", "off_zero_size.off",
+              "ply_truncated.ply",
               "ply_trailing.ply", "ply_binary_truncated.ply", "ply_garbage.ply", "obj_short_face.obj",
               "obj_missing_vertex.obj", "obj_unknown.obj", "obj_short_vertex.obj", "stl_truncated.stl",
               "unknown_suffix.docx", "cloud_collinear.xyz", "cloud_ragged.xyz", "cloud_two_columns.xyz",
@@ -238,13 +250,14 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
     cases = []
 
     def add(cls, argv):
-        argv = [str(out / a) if a.startswith("OUT") else a for a in argv]
+        argv = [str(out / a) if str(a).startswith("OUT") else str(a) for a in argv]
         cases.append((cls, argv))
 
     for name in BAD_SHAPES:
         for cmd, build in SHAPE_COMMANDS.items():
             if cmd == "info" and name in ("off_zero_area.off", "off_disconnected.off", "off_nan.off",
-                                          "off_bad_index.off", "off_huge_scale.off", "off_tiny_scale.off"):
+                                          "off_bad_index.off", "off_huge_scale.off", "off_tiny_scale.off",
+                                          "off_zero_size.off"):
                 continue  # info reports these as problems (exit 0) instead of refusing
             add(f"shape file {name} / {cmd}", build(str(f[name])))
     for spec in BAD_DEMOS:
@@ -271,6 +284,9 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
     for kind in ("empty", "off_only", "garbage", "binary"):
         add(f"evaluate dataset with a {kind} file", ["evaluate", str(f[f"dataset_{kind}"]), "--out", "OUT_DIR",
                                                      "--no-cache"])
+    add("match of a mesh scaled by 1e-25 (written with 10 decimals) against itself at -n 30",
+        ["match", f["off_zero_size_sphere.off"], f["off_zero_size_sphere.off"], "--landmarks-source", "0",
+         "--landmarks-target", "0", "-n", "30", "--no-cache", "-o", "OUT.txt"])
     add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
     add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
     return cases
