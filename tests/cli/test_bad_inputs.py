@@ -81,3 +81,13 @@ def test_every_bad_python_call_raises_one_input_error(tmp_path, monkeypatch):
 def test_messages_name_the_value_and_what_is_allowed(capsys, argv, needle):
     code, _, err = run_cli(capsys, *argv)
     assert code == 2 and needle in err
+
+
+def test_binary_content_is_named_not_quoted(tmp_path, capsys, monkeypatch):
+    """evaluate's vertex-count probe quoted the first 'word' of a binary file: '\\x00ÿ\\x00ÿ...'."""
+    monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path / "cache"))
+    f = _table().make_files(tmp_path)
+    for argv in (["evaluate", f["dataset_binary"], "--out", tmp_path / "out", "--no-cache"],
+                 ["score", f["off_binary.off"], "--no-cache"]):
+        code, _, err = run_cli(capsys, *argv)
+        assert code == 2 and "binary data" in err and "\\x00" not in err and "ÿ" not in err, err

@@ -100,6 +100,8 @@ def off_header(lines, name):
         raise InputError(f"{name}: no OFF header")
     head = lines[0][0]
     if head.upper() not in OFF_KEYWORDS:
+        if not (head.isascii() and head.isprintable()):  # raw bytes would be quoted as mojibake
+            raise InputError(f"{name}: binary data, not an OFF file")
         raise InputError(f"{name}: not an OFF file (first word {head[:20]!r})")
     if "BINARY" in [t.upper() for t in lines[0][1:]]:
         raise InputError(f"{name}: binary OFF is not supported; save it as ASCII OFF")
