@@ -173,3 +173,23 @@ def test_match_is_scale_free(scale):
     got = sc.match((src.vertices * scale, src.faces), (tgt.vertices * scale, tgt.faces), lm, lm, n_points=60,
                    cache=False)
     assert np.mean(got.map == ref.map) > 0.999  # distance rows are float32: ties may round apart
+
+
+G = "demo:sphere:subdivisions=1"
+
+
+@pytest.mark.parametrize("call,needle", [
+    (lambda: sc.match(G, G, [0], [0], n_points=8, cache=False, refin=False), "unknown option 'refin'"),
+    (lambda: sc.match(G, G, [0], [0], matcher="faq", n_points=8, cache=False, k=3), "unknown option 'k'"),
+    (lambda: sc.landmarks(G, 2, "cnbs", 8, cache=False, methd="fps"), "no option 'methd'"),
+    (lambda: sc.landmarks(G, 2, "fps", 8, cache=False, resolve_fraction=0.2), "no option 'resolve_fraction'"),
+    (lambda: sc.score(G, 8, exact="yes", cache=False), "exact must be 'auto', True or False"),
+], ids=["match refin", "faq k", "landmarks methd", "fps resolve_fraction", "score exact=yes"])
+def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call, needle):
+    """They raised TypeError (or a plain ValueError) after the geodesics had been computed."""
+    def no_work(*args, **kwargs):
+        raise AssertionError("the shape was loaded before the keywords were checked")
+
+    monkeypatch.setattr(sc.api, "load", no_work)
+    with pytest.raises(InputError, match=re.escape(needle)):
+        call()

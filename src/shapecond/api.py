@@ -33,6 +33,7 @@ True
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -187,10 +188,12 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     ``shapecond score --json``), ``.plot()``.
     """
     from .symmetry.report import score_shape
+    from .symmetry.score import check_exact
 
     shape_kw, rest = _split(dict(options))
     if rest:
         raise InputError(f"score() got unknown options: {', '.join(rest)}")
+    check_exact(exact)
     shape = metric_shape(x, n_points, landmarks=landmarks, **shape_kw)
     if time_limit is not None:
         time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
@@ -233,9 +236,10 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     ``metric_shape`` (seed, force, ...) or to the method (see ``select_landmarks``).
     Returns a ``LandmarkResult`` whose ``landmarks`` are input ids.
     """
-    from .landmarks import select_landmarks
+    from .landmarks import check_method_options, select_landmarks
 
     shape_kw, method_kw = _split(dict(options))
+    check_method_options(method, method_kw)  # a misspelt option is refused before the geodesics
     ids = parse_ids(user_landmarks)
     if method == "user":
         if not ids:
@@ -334,6 +338,13 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
 
     if matcher not in MATCHERS:
         raise InputError(f"unknown matcher {matcher!r} (choose from {', '.join(MATCHERS)})")
+    from .matching.seeded import faq_match
+    from .matching.spectral import lh05_match
+
+    known = set(list(inspect.signature(lh05_match if matcher == "lh05" else faq_match).parameters)[4:]) - {"seed"}
+    if set(options) - known:  # refused before the geodesics, not as a TypeError after them
+        raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
+                         f"{matcher!r} (its options: {', '.join(sorted(known))})")
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     if len(ids_s) != len(ids_t):
         raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")

@@ -334,6 +334,10 @@ def api_cases(folder) -> list[tuple[str, object]]:
         ("unknown matcher", lambda: sc.match(GOOD, GOOD, [0], [0], matcher="magic", n_points=8, cache=False)),
         ("resolve_fraction 2", lambda: sc.heatmap(GOOD, n_points=8, resolve_fraction=2, cache=False)),
         ("unknown score option", lambda: sc.score(GOOD, 8, colour="red")),
+        ("sc.match(..., refin=False)", lambda: sc.match(GOOD, GOOD, [0], [0], n_points=8, cache=False, refin=False)),
+        ("sc.landmarks(..., methd=)", lambda: sc.landmarks(GOOD, 2, "cnbs", 8, cache=False, methd="fps")),
+        ("sc.landmarks fps with a cnbs option", lambda: sc.landmarks(GOOD, 2, "fps", 8, cache=False, n_maps=3)),
+        ('sc.score(..., exact="yes")', lambda: sc.score(GOOD, 8, exact="yes", cache=False)),
         ("evaluate garbage", lambda: sc.evaluate(f["dataset_garbage"], cache=False)),
     ]
     return cases
