@@ -193,3 +193,25 @@ def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call,
     monkeypatch.setattr(sc.api, "load", no_work)
     with pytest.raises(InputError, match=re.escape(needle)):
         call()
+
+
+def test_lh05s_affinity_is_in_the_estimate_and_refused_before_the_geodesics(monkeypatch):
+    """match cat0 cat0 -n 5000 warned '2 min', computed 33 s at 3.5 GB, then LH05 refused a 37 GB matrix."""
+    from shapecond.limits import lh05_affinity_bytes
+    from shapecond.matching import pipeline
+    from shapecond.matching.spectral import MAX_AFFINITY_BYTES
+
+    assert lh05_affinity_bytes(5000, 1) / 2**30 == pytest.approx(37.2, abs=0.1)
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("matching started before the cost check")
+
+    monkeypatch.setattr(pipeline, "match_shapes", no_work)
+    big = "demo:sphere:subdivisions=6"
+    for force in (False, True):  # the matcher refuses beyond its limit whatever force says
+        with pytest.raises(sc.TooLargeError, match="37.2 GB"):
+            sc.match(big, big, [0], [0], n_points=5000, cache=False, force=force)
+    # 12 landmarks at N = 1425 would fit (2.98 GB), but LH05 also matches with the first 3 (3.01 GB)
+    assert lh05_affinity_bytes(1425, 12) < MAX_AFFINITY_BYTES < lh05_affinity_bytes(1425, 3)
+    with pytest.raises(sc.TooLargeError, match="affinity"):
+        sc.match(big, big, list(range(12)), list(range(12)), n_points=1425, cache=False)

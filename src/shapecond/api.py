@@ -322,6 +322,26 @@ class MatchResult:
                 f"{s.get('n_landmarks')} landmarks, N={s.get('n_points')})")
 
 
+def _matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, what: str) -> float:
+    """Memory of the matcher itself (LH05's dense affinity matrix), checked before any geodesic:
+    beyond ``spectral.MAX_AFFINITY_BYTES`` the matcher refuses whatever ``force`` says."""
+    if matcher != "lh05":
+        return 0.0
+    from .errors import TooLargeError
+    from .limits import human_bytes, lh05_affinity_bytes
+    from .matching.nested import core_size
+    from .matching.spectral import MAX_AFFINITY_BYTES, lh05_match
+
+    k = options.get("k", inspect.signature(lh05_match).parameters["k"].default)
+    nested = options.get("nested", True) and core_size(n_landmarks) is not None
+    nbytes = lh05_affinity_bytes(n_points, core_size(n_landmarks) if nested else n_landmarks, check_int(k, "k", lo=1))
+    if nbytes > MAX_AFFINITY_BYTES:
+        raise TooLargeError(f"{what}: LH05's affinity matrix would need about {human_bytes(nbytes)}, more than the "
+                            f"{human_bytes(MAX_AFFINITY_BYTES)} it allows; use fewer samples or a smaller k "
+                            "(--k), or the faq matcher")
+    return nbytes
+
+
 def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
           n_points: int = DEFAULT_POINTS, seed: int = 0, backend: str = "heat", dense: str = "distances",
           samples: str = "fps", cache: bool = True, force: bool = False, largest_component: bool = False,
@@ -368,8 +388,10 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
         return MatchResult(np.asarray(sm.t, dtype=np.int64), summary)
     n_points = check_int(n_points, "n_points", lo=3)
     n = max(src.n_vertices, tgt.n_vertices)
-    check_cost(f"matching with {n_points} samples on {n} vertices ({backend} distances)",
-               2 * geodesic_seconds(n, n_points, backend), 2 * metric_bytes(n_points, n), force)
+    what = f"matching with {n_points} samples on {n} vertices ({backend} distances)"
+    matcher_bytes = _matcher_bytes(matcher, n_points, len(ids_s), options, what)
+    check_cost(what, 2 * geodesic_seconds(n, n_points, backend), 2 * metric_bytes(n_points, n) + matcher_bytes,
+               force)
     m = match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), matcher=matcher,
                      n_points=n_points, backend=backend, seed=seed, dense=dense, cache=cache, samples=samples,
                      **options)

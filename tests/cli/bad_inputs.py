@@ -287,6 +287,11 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
     add("match of a mesh scaled by 1e-25 (written with 10 decimals) against itself at -n 30",
         ["match", f["off_zero_size_sphere.off"], f["off_zero_size_sphere.off"], "--landmarks-source", "0",
          "--landmarks-target", "0", "-n", "30", "--no-cache", "-o", "OUT.txt"])
+    big = "demo:sphere:subdivisions=6"  # 40,962 vertices: LH05 at -n 5000 needs a 37 GB affinity matrix
+    for force in ([], ["--force"]):
+        add(f"match -n 5000 refused up front for LH05's memory {' '.join(force)}".strip(),
+            ["match", big, big, "--landmarks-source", "0", "--landmarks-target", "0", "-n", "5000", "--no-cache",
+             "-o", "OUT.txt"] + force)
     add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
     add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
     return cases
