@@ -292,8 +292,9 @@ class Table:
 
     # opening: check the output, lock, read and recognise what is there, fold a journal in
     def __enter__(self):
-        if os.path.lexists(self.path):  # a link, FIFO, device or folder: refused before the lock is made
-            os.close(open_regular(self.path, os.O_RDONLY, follow_links=False, output=True))
+        for path in {self.path, self.lines.path}:  # a link, FIFO, device or folder: refused before the lock
+            if os.path.lexists(path):
+                os.close(open_regular(path, os.O_RDONLY, follow_links=False, output=True))
         self.lock.__enter__()
         try:
             self._open()
