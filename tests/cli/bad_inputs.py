@@ -55,6 +55,35 @@ def _sphere():
     return np.asarray(s.vertices), np.asarray(s.faces)
 
 
+def _special_files(d: Path) -> dict:
+    """Files that are not regular (FIFOs, a device) and the files a batch output must leave alone."""
+    made = {}
+
+    def fifo(name):
+        if not os.path.lexists(d / name):
+            os.mkfifo(d / name)
+        made[name] = d / name
+
+    def link(name, target):
+        if not os.path.lexists(d / name):
+            (d / name).parent.mkdir(parents=True, exist_ok=True)
+            os.symlink(target, d / name)
+        made[name] = d / name
+
+    fifo("fifo.off")
+    fifo("ids_fifo")
+    link("dev_zero.off", "/dev/zero")
+    for name, text in {"notes.jsonl": '{"note": 1}\n{"note": 2}\n{"tor', "victim.csv": "a,b\n1,2\n3,",
+                       "victim.txt": "precious\n"}.items():
+        (d / name).write_text(text)
+        made[name] = d / name
+    link("link.csv", d / "victim.csv")
+    link("planted_lock/.t.csv.lock", d / "victim.txt")
+    link("planted_journal/.t.parquet.journal", d / "victim.txt")
+    fifo("fifo.jsonl")
+    return made
+
+
 def make_files(folder) -> dict:
     """Write every bad (and one good) file into ``folder``; return name -> path."""
     d = Path(folder)
@@ -72,6 +101,9 @@ def make_files(folder) -> dict:
         "ids_repeated": "1\n1\n",
         "ids_empty_lines": "\n\n# nothing\n",
         "ids_words": "left paw\n",
+        "ids_fraction_in_line": "5, 7.5, 9\n",  # was read as [5]
+        "ids_bim_face_point": "12 0.5 0.5 0\n",  # a .pid point inside triangle 12, not vertex 12
+        "ids_coordinates": "12 0.25 0.5 0.75 1.5\n",  # an id followed by coordinates: was read as [12]
         # meshes
         "off_truncated_faces.off": _off(V, F[:1]).replace(f"4 1 0", "4 4 0"),
         "off_truncated_vertices.off": "OFF\n4 4 0\n0 0 0\n1 0 0\n",
@@ -140,6 +172,7 @@ def make_files(folder) -> dict:
     out["npz_named.npy"] = d / "npz_named.npy"
     np.savez(d / "npz_without_D.npz", X=np.zeros(3))
     out["npz_without_D.npz"] = d / "npz_without_D.npz"
+    out.update(_special_files(d))
     (d / "a_folder.off").mkdir(exist_ok=True)
     out["a_folder.off"] = d / "a_folder.off"
     out["missing.off"] = d / "missing.off"
@@ -183,10 +216,11 @@ BAD_SHAPES = ["off_truncated_faces.off", "off_truncated_vertices.off", "off_trai
               "matrix_asymmetric.npy", "matrix_negative.npy", "matrix_nan.npy", "matrix_diagonal.npy",
               "matrix_zero.npy", "matrix_duplicate_points.npy", "matrix_two.npy", "array_3x3_bad.npy",
               "array_3d.npy", "array_strings.npy", "npz_named.npy", "npz_without_D.npz", "a_folder.off",
-              "missing.off"]
+              "missing.off", "fifo.off", "dev_zero.off"]
 
 BAD_IDS = ["ids_binary", "ids_latin1", "ids_nan", "ids_inf", "ids_huge", "ids_negative", "ids_fraction",
-           "ids_repeated", "ids_empty_lines", "ids_words"]
+           "ids_repeated", "ids_empty_lines", "ids_words", "ids_fraction_in_line", "ids_bim_face_point",
+           "ids_coordinates", "ids_fifo"]
 BAD_ID_TEXT = ["-1", "1,1", "a,b", "1.5", "nan", str(2**70), "3,,x"]
 
 #: (option, bad values, command line around it) for numeric options.
@@ -292,9 +326,23 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
         add(f"match -n 5000 refused up front for LH05's memory {' '.join(force)}".strip(),
             ["match", big, big, "--landmarks-source", "0", "--landmarks-target", "0", "-n", "5000", "--no-cache",
              "-o", "OUT.txt"] + force)
+    small = [GOOD, "--points", "8", "--no-cache"]
+    for mode in ([], ["--resume"], ["--overwrite"]):
+        for name in ("notes.jsonl", "victim.csv", "link.csv", "fifo.jsonl"):
+            add(f"batch output {name} {' '.join(mode)}".strip(), ["batch", *small, "--out", f[name], *mode])
+    add("batch output with a planted lock link",
+        ["batch", *small, "--out", f["planted_lock/.t.csv.lock"].parent / "t.csv"])
+    add("batch output with a planted journal link",
+        ["batch", *small, "--out", f["planted_journal/.t.parquet.journal"].parent / "t.parquet"])
     add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
     add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
     return cases
+
+
+def time_limit(cls: str) -> float:
+    """Seconds a case may take: 10 for those that used to hang (FIFOs, devices, batch outputs),
+    otherwise enough for a slow machine's first compilation of the numba kernels."""
+    return 10.0 if any(w in cls for w in ("fifo", "dev_zero", "batch output")) else 300.0
 
 
 def api_cases(folder) -> list[tuple[str, object]]:
