@@ -195,3 +195,17 @@ def test_a_read_only_folder_is_one_error_line(tmp_path, suffix):
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and lines[0].startswith("error: "), proc.stderr
     assert "Read-only file system" in lines[0] or "Permission denied" in lines[0]
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".jsonl"])
+def test_a_refused_batch_leaves_even_its_own_tables_torn_line(tmp_path, capsys, suffix):
+    """The torn last line of the batch's own table is cut only by a batch that goes on to write."""
+    from shapecond.batch.table import Table
+    from tests.batch.test_batch import _row
+
+    path = tmp_path / f"t{suffix}"
+    with Table(path) as table:
+        table.append(_row(1))
+    with open(path, "a") as fh:
+        fh.write('"/s/2.off",h2,{' if suffix == ".csv" else '{"file": "/s/2.off", "content_')
+    refused(capsys, tmp_path, path, needle="already holds 1 rows")

@@ -102,7 +102,8 @@ def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=No
             if spec in unreadable:
                 table.append(_unreadable_row(spec, params, unreadable[spec]))
         readable = [k for k in todo if k[0] not in unreadable]
-        where = _score(table, readable, options, n_jobs, scheduler, progress) if readable else "nothing to do"
+        where = (_score(table, readable, options, n_jobs, scheduler, progress) if readable
+                 else "this process" if todo else "nothing to do")
         done = {schema.row_key(r): r for r in table.rows}
         batch_rows = [done[k] for k in keys]
     return _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)

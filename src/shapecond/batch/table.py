@@ -309,22 +309,26 @@ class Table:
     def _open(self):
         self._created = not os.path.lexists(self.path)
         self.lines.open()
-        existing = self._read()
+        existing, tail = self._read()
         if self.mode == "overwrite":
             existing = []
             self.lines.clear()
         elif existing and self.mode == "new":
             raise InputError(f"{self.path} already holds {len(existing)} rows: pass --resume to add to it "
                              "or --overwrite to start again")
+        elif tail:  # only now that the file is known to be ours, and will be written to
+            self.lines.cut(len(tail))
+            warnings.warn(f"{self.lines.path}: cut its incomplete last line ({len(tail)} bytes), left by an "
+                          "interrupted batch", stacklevel=4)
         self.rows = existing
         if self.format == "csv" and os.fstat(self.lines.fd).st_size == 0:
             self.lines.write(_csv_line(schema.NAMES))
         if self.format == "parquet":
             self._snapshot()  # the file exists, readable, from the start; a journal is folded in
 
-    def _read(self) -> list[dict]:
-        """The rows already there, once the output (and journal) are recognised as this batch's table
-        (module docstring); only then is a torn last line cut off."""
+    def _read(self) -> tuple[list[dict], bytes]:
+        """(the rows already there, the torn bytes after the journal's last line), once the output and
+        journal are recognised as this batch's table (module docstring); nothing is changed."""
         strict = self.mode != "overwrite"
         try:
             rows = self._read_parquet(strict) if self.format == "parquet" else []
@@ -336,12 +340,8 @@ class Table:
         except Exception as exc:  # noqa: BLE001 - any reader failure means "not our table"
             raise InputError(f"{self.path}: not a readable batch table ({exc.__class__.__name__}); "
                              "choose another --out") from None
-        if tail:
-            self.lines.cut(len(tail))
-            warnings.warn(f"{self.lines.path}: cut its incomplete last line ({len(tail)} bytes), left by an "
-                          "interrupted batch", stacklevel=4)
         seen = {schema.row_key(r) for r in rows}
-        return rows + [r for r in more if schema.row_key(r) not in seen]
+        return rows + [r for r in more if schema.row_key(r) not in seen], tail
 
     def _read_parquet(self, strict: bool) -> list[dict]:
         if self._created:
