@@ -209,3 +209,20 @@ def test_a_refused_batch_leaves_even_its_own_tables_torn_line(tmp_path, capsys, 
     with open(path, "a") as fh:
         fh.write('"/s/2.off",h2,{' if suffix == ".csv" else '{"file": "/s/2.off", "content_')
     refused(capsys, tmp_path, path, needle="already holds 1 rows")
+
+
+def test_json_lines_rows_are_recognised_by_their_columns_whatever_their_order(tmp_path):
+    """A JSON row is read by name: a table rewritten with sorted keys (jq -S) is still the batch's own."""
+    import json
+
+    from shapecond.batch import schema
+    from shapecond.batch.table import Table
+    from tests.batch.test_batch import _row
+
+    path = tmp_path / "t.jsonl"
+    row = {k: _row(1)[k] for k in schema.NAMES}
+    path.write_text(json.dumps(row, sort_keys=True).replace("Infinity", '"inf"') + "\n")
+    with Table(path, "resume") as table:
+        assert [r["file"] for r in table.rows] == ["/s/1.off"]
+        table.append(_row(2))
+    assert [r["file"] for r in read_table(path)] == ["/s/1.off", "/s/2.off"]

@@ -209,10 +209,12 @@ class _LineFile:
 
 # --- recognising our own table ----------------------------------------------------------
 
-def _columns_problem(names, where, strict: bool) -> str | None:
+def _columns_problem(names, where, strict: bool, ordered: bool = True) -> str | None:
     """Why columns ``names`` are not those of this version's table (``strict``) or of any
-    version's (``--overwrite``); None when they are."""
-    if strict and tuple(names) == schema.NAMES:
+    version's (``--overwrite``); None when they are.  ``ordered``: in this version's order too
+    (CSV rows are appended by position; a JSON row is read by name)."""
+    same = tuple(names) == schema.NAMES if ordered else sorted(names) == sorted(schema.NAMES)
+    if strict and same:
         return None
     if set(schema.KEY) <= set(names):
         if not strict:
@@ -241,7 +243,7 @@ def _json_rows(lines, tail: bytes, where, strict: bool) -> list[dict]:
             obj = None
         if not isinstance(obj, dict):
             raise InputError(f"{where}:{k}: not a row of a batch table (it is not one); choose another --out")
-        problem = _columns_problem(list(obj), f"{where}:{k}", strict)
+        problem = _columns_problem(list(obj), f"{where}:{k}", strict, ordered=False)
         if problem:
             raise InputError(problem)
         if strict:
