@@ -173,3 +173,45 @@ def test_match_is_scale_free(scale):
     got = sc.match((src.vertices * scale, src.faces), (tgt.vertices * scale, tgt.faces), lm, lm, n_points=60,
                    cache=False)
     assert np.mean(got.map == ref.map) > 0.999  # distance rows are float32: ties may round apart
+
+
+G = "demo:sphere:subdivisions=1"
+
+
+@pytest.mark.parametrize("call,needle", [
+    (lambda: sc.match(G, G, [0], [0], n_points=8, cache=False, refin=False), "unknown option 'refin'"),
+    (lambda: sc.match(G, G, [0], [0], matcher="faq", n_points=8, cache=False, k=3), "unknown option 'k'"),
+    (lambda: sc.landmarks(G, 2, "cnbs", 8, cache=False, methd="fps"), "no option 'methd'"),
+    (lambda: sc.landmarks(G, 2, "fps", 8, cache=False, resolve_fraction=0.2), "no option 'resolve_fraction'"),
+    (lambda: sc.score(G, 8, exact="yes", cache=False), "exact must be 'auto', True or False"),
+], ids=["match refin", "faq k", "landmarks methd", "fps resolve_fraction", "score exact=yes"])
+def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call, needle):
+    """They raised TypeError (or a plain ValueError) after the geodesics had been computed."""
+    def no_work(*args, **kwargs):
+        raise AssertionError("the shape was loaded before the keywords were checked")
+
+    monkeypatch.setattr(sc.api, "load", no_work)
+    with pytest.raises(InputError, match=re.escape(needle)):
+        call()
+
+
+def test_lh05s_affinity_is_in_the_estimate_and_refused_before_the_geodesics(monkeypatch):
+    """match cat0 cat0 -n 5000 warned '2 min', computed 33 s at 3.5 GB, then LH05 refused a 37 GB matrix."""
+    from shapecond.limits import lh05_affinity_bytes
+    from shapecond.matching import pipeline
+    from shapecond.matching.spectral import MAX_AFFINITY_BYTES
+
+    assert lh05_affinity_bytes(5000, 1) / 2**30 == pytest.approx(37.2, abs=0.1)
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("matching started before the cost check")
+
+    monkeypatch.setattr(pipeline, "match_shapes", no_work)
+    big = "demo:sphere:subdivisions=6"
+    for force in (False, True):  # the matcher refuses beyond its limit whatever force says
+        with pytest.raises(sc.TooLargeError, match="37.2 GB"):
+            sc.match(big, big, [0], [0], n_points=5000, cache=False, force=force)
+    # 12 landmarks at N = 1425 would fit (2.98 GB), but LH05 also matches with the first 3 (3.01 GB)
+    assert lh05_affinity_bytes(1425, 12) < MAX_AFFINITY_BYTES < lh05_affinity_bytes(1425, 3)
+    with pytest.raises(sc.TooLargeError, match="affinity"):
+        sc.match(big, big, list(range(12)), list(range(12)), n_points=1425, cache=False)

@@ -1,7 +1,9 @@
 """Cache entries are checked, never trusted; an unusable cache is a warning, never a failure."""
 
+import hashlib
 import json
 import os
+import stat
 import warnings
 
 import numpy as np
@@ -10,7 +12,7 @@ import pytest
 from shapecond import cache
 from shapecond.shapes.metric import metric_shape
 from shapecond.shapes.synthetic import generate
-from tests.conftest import run_cli
+from tests.conftest import deadline, run_cli
 
 
 @pytest.fixture
@@ -36,7 +38,8 @@ def test_an_entry_written_for_another_key_is_recomputed_not_used(folder):
     with np.load(entry) as z:  # craft: another shape's content under this key, still a valid archive
         data = {k: z[k] for k in z.files}
     forged = dict(data, D=other.D, samples=other.samples)
-    forged["__checksum__"] = np.array(cache._checksum({k: v for k, v in forged.items() if not k.startswith("__")}))
+    content = {k: v for k, v in forged.items() if not k.startswith("__")}
+    forged["__tag__"] = np.array(cache._tag("0" * 32, content, cache.cache_secret()))  # valid for its own key
     forged["__key__"] = np.array("0" * 32)
     np.savez(entry, **forged)
     with pytest.warns(cache.CacheWarning, match="another input"):
@@ -122,3 +125,70 @@ def test_integer_keys_survive_the_checksum(folder, recwarn):
     cache.save_json("landmarks", "k10", payload)
     assert cache.load_json("landmarks", "k10") == {"scores": {"1": 0.5, "3": 0.25, "10": "inf"}}
     assert not [w for w in recwarn if issubclass(w.category, cache.CacheWarning)]
+
+
+def _forge(entry, D, samples, tag):
+    """Rewrite ``entry`` with another matrix and samples and the given checksum (a tampering user)."""
+    with np.load(entry) as z:
+        data = {k: z[k] for k in z.files}
+    np.savez(entry, **dict(data, D=D, samples=samples, __tag__=np.array(tag)))
+
+
+def test_an_entry_rewritten_with_a_recomputed_plain_checksum_is_recomputed_not_used(folder):
+    """The audit's case: another shape's content under this key with an unkeyed SHA-256 recomputed
+    (what the checksum was) changed σ and shifted every sample id, exit 0."""
+    fresh = _shape()
+    entry = _only_entry(folder)
+    other = metric_shape(generate("blob", subdivisions=2, seed=3), n_points=12, target="dense", target_factor=2,
+                         cache=False)
+    with np.load(entry) as z:
+        content = {k: z[k] for k in z.files if not k.startswith("__")}
+    content.update(D=other.D, samples=other.samples)
+    h = hashlib.sha256()
+    for name in sorted(content):
+        a = np.ascontiguousarray(content[name])
+        h.update(f"{name}{a.dtype.str}{a.shape}".encode())
+        h.update(a.tobytes())
+    _forge(entry, other.D, other.samples, h.hexdigest())
+    with pytest.warns(cache.CacheWarning, match="keyed checksum"):
+        again = _shape()
+    assert np.array_equal(again.D, fresh.D) and np.array_equal(again.samples, fresh.samples)
+    # a keyed checksum made with another secret (an entry copied from another user's cache) fails too
+    _forge(_only_entry(folder), other.D, other.samples, cache._tag(entry.name[7:-4], content, b"x" * 32))
+    with pytest.warns(cache.CacheWarning, match="keyed checksum"):
+        assert np.array_equal(_shape().samples, fresh.samples)
+
+
+def test_the_secret_is_private_and_a_secret_that_is_not_disables_the_cache(folder):
+    _shape()
+    secret = folder / cache.SECRET_NAME
+    assert stat.S_IMODE(secret.stat().st_mode) == 0o600 and len(secret.read_bytes()) == cache.SECRET_BYTES
+    secret.chmod(0o644)  # readable by others: whoever reads it can forge entries
+    with pytest.warns(cache.CacheWarning, match="may be read by others"):
+        _shape()
+    secret.chmod(0o600)
+    real = folder / "elsewhere"
+    os.replace(secret, real)
+    secret.symlink_to(real)  # a planted link is not followed
+    with pytest.warns(cache.CacheWarning, match="symbolic link"):
+        _shape()
+    secret.unlink()
+    os.replace(real, secret)
+    if os.geteuid() == 0:  # root can give it away: a secret of another user is not ours
+        os.chown(secret, 65534, 65534)
+        with pytest.warns(cache.CacheWarning, match="another user"):
+            _shape()
+
+
+def test_a_fifo_planted_at_an_entry_is_skipped_without_blocking(folder):
+    fresh = _shape()
+    entry = _only_entry(folder)
+    entry.unlink()
+    os.mkfifo(entry)
+    with deadline(10), pytest.warns(cache.CacheWarning, match="FIFO"):
+        again = _shape()
+    assert np.array_equal(again.D, fresh.D)
+    key = "j" * 32
+    os.mkfifo(folder / f"landmarks-{key}.json")
+    with deadline(10), pytest.warns(cache.CacheWarning, match="FIFO"):
+        assert cache.load_json("landmarks", key) is None

@@ -1,6 +1,7 @@
 """The one atomic writer: every output survives a kill, never follows a planted link, handles streams."""
 
 import os
+import re
 import shutil
 import signal
 import stat
@@ -57,6 +58,46 @@ def test_killed_mid_write_keeps_the_previous_file_and_no_temporary(tmp_path, tmp
         assert leftovers == []
     else:  # a named temporary file cannot be removed by a process killed with SIGKILL
         assert all(p.startswith(".s.npz.") and p.endswith(".tmp") for p in leftovers)
+
+
+@pytest.mark.parametrize("tmpfile", [True, False], ids=["O_TMPFILE", "named temporary"])
+def test_a_kill_between_link_and_rename_leaves_a_temporary_that_the_next_write_removes(tmp_path, tmpfile):
+    """SIGKILL at the rename: the complete temporary file has its name; the next write of the target
+    (any writer: here the library's) removes it."""
+    target = tmp_path / "m.txt"
+    target.write_text("previous")
+    script = textwrap.dedent(f"""
+        import os, signal
+        import shapecond.output as output
+        output.USE_TMPFILE = {tmpfile}
+        output.os.replace = lambda *a: os.kill(os.getpid(), signal.SIGKILL)
+        output.write_text(r"{target}", "new map")
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, timeout=120)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr.decode()[-400:]
+    (left,) = [p for p in os.listdir(tmp_path) if p != "m.txt"]
+    assert re.fullmatch(r"\.m\.txt\.[0-9a-f]{16}\.tmp", left) and (tmp_path / left).read_text() == "new map"
+    output.write_text(target, "newer")
+    assert os.listdir(tmp_path) == ["m.txt"] and target.read_text() == "newer"
+
+
+def test_a_live_writers_temporary_file_and_planted_names_are_left_alone(tmp_path, monkeypatch):
+    monkeypatch.setattr(output, "USE_TMPFILE", False)
+    target = tmp_path / "m.txt"
+    fd, live = output._open_temp(tmp_path, "m.txt")  # another process writing the same target right now
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    planted = tmp_path / ".m.txt.0123456789abcdef.tmp"
+    planted.symlink_to(victim)
+    fifo = tmp_path / ".m.txt.fedcba9876543210.tmp"
+    os.mkfifo(fifo)
+    try:
+        output.write_text(target, "mine")
+        assert live.exists() and planted.is_symlink() and stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    finally:
+        os.close(fd)  # the writer dies: its file is stale now
+    output.write_text(target, "mine again")
+    assert not live.exists() and planted.is_symlink() and victim.read_text() == "precious"
 
 
 WRITERS = {
@@ -191,4 +232,4 @@ def test_the_cache_folder_is_written_through_the_writer(tmp_path, monkeypatch):
     monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path))
     cache.save_arrays("x", "k" * 32, {"a": np.arange(3)})
     assert cache.load_arrays("x", "k" * 32, {"a": (3,)})["a"].tolist() == [0, 1, 2]
-    assert [p.name for p in tmp_path.iterdir()] == [f"x-{'k' * 32}.npz"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [cache.SECRET_NAME, f"x-{'k' * 32}.npz"]

@@ -33,6 +33,7 @@ True
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -187,10 +188,12 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     ``shapecond score --json``), ``.plot()``.
     """
     from .symmetry.report import score_shape
+    from .symmetry.score import check_exact
 
     shape_kw, rest = _split(dict(options))
     if rest:
         raise InputError(f"score() got unknown options: {', '.join(rest)}")
+    check_exact(exact)
     shape = metric_shape(x, n_points, landmarks=landmarks, **shape_kw)
     if time_limit is not None:
         time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
@@ -236,9 +239,10 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     ``metric_shape`` (seed, force, ...) or to the method (see ``select_landmarks``).
     Returns a ``LandmarkResult`` whose ``landmarks`` are input ids.
     """
-    from .landmarks import select_landmarks
+    from .landmarks import check_method_options, select_landmarks
 
     shape_kw, method_kw = _split(dict(options))
+    check_method_options(method, method_kw)  # a misspelt option is refused before the geodesics
     ids = parse_ids(user_landmarks)
     if method == "user":
         if not ids:
@@ -348,6 +352,26 @@ class MatchResult:
                 f"{s.get('n_landmarks')} landmarks, N={s.get('n_points')})")
 
 
+def _matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, what: str) -> float:
+    """Memory of the matcher itself (LH05's dense affinity matrix), checked before any geodesic:
+    beyond ``spectral.MAX_AFFINITY_BYTES`` the matcher refuses whatever ``force`` says."""
+    if matcher != "lh05":
+        return 0.0
+    from .errors import TooLargeError
+    from .limits import human_bytes, lh05_affinity_bytes
+    from .matching.nested import core_size
+    from .matching.spectral import MAX_AFFINITY_BYTES, lh05_match
+
+    k = options.get("k", inspect.signature(lh05_match).parameters["k"].default)
+    nested = options.get("nested", True) and core_size(n_landmarks) is not None
+    nbytes = lh05_affinity_bytes(n_points, core_size(n_landmarks) if nested else n_landmarks, check_int(k, "k", lo=1))
+    if nbytes > MAX_AFFINITY_BYTES:
+        raise TooLargeError(f"{what}: LH05's affinity matrix would need about {human_bytes(nbytes)}, more than the "
+                            f"{human_bytes(MAX_AFFINITY_BYTES)} it allows; use fewer samples or a smaller k "
+                            "(--k), or the faq matcher")
+    return nbytes
+
+
 def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
           n_points: int = DEFAULT_POINTS, seed: int = 0, backend: str = "heat", dense: str = "distances",
           samples: str = "fps", cache: bool = True, force: bool = False, largest_component: bool = False,
@@ -364,6 +388,13 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
 
     if matcher not in MATCHERS:
         raise InputError(f"unknown matcher {matcher!r} (choose from {', '.join(MATCHERS)})")
+    from .matching.seeded import faq_match
+    from .matching.spectral import lh05_match
+
+    known = set(list(inspect.signature(lh05_match if matcher == "lh05" else faq_match).parameters)[4:]) - {"seed"}
+    if set(options) - known:  # refused before the geodesics, not as a TypeError after them
+        raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
+                         f"{matcher!r} (its options: {', '.join(sorted(known))})")
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     if len(ids_s) != len(ids_t):
         raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
@@ -387,8 +418,10 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
         return MatchResult(np.asarray(sm.t, dtype=np.int64), summary)
     n_points = check_int(n_points, "n_points", lo=3)
     n = max(src.n_vertices, tgt.n_vertices)
-    check_cost(f"matching with {n_points} samples on {n} vertices ({backend} distances)",
-               2 * geodesic_seconds(n, n_points, backend), 2 * metric_bytes(n_points, n), force)
+    what = f"matching with {n_points} samples on {n} vertices ({backend} distances)"
+    matcher_bytes = _matcher_bytes(matcher, n_points, len(ids_s), options, what)
+    check_cost(what, 2 * geodesic_seconds(n, n_points, backend), 2 * metric_bytes(n_points, n) + matcher_bytes,
+               force)
     m = match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), matcher=matcher,
                      n_points=n_points, backend=backend, seed=seed, dense=dense, cache=cache, samples=samples,
                      **options)

@@ -5,33 +5,61 @@ folder (``platformdirs.user_cache_dir("shapecond")``, e.g. ``~/.cache/shapecond`
 on Linux), one file per entry named ``KIND-KEY.npz`` (arrays) or ``KIND-KEY.json``.
 The key is a hash of everything the result was computed from (:func:`key_of`).
 
-An entry is **checked, never trusted**: it carries its key and a SHA-256
-checksum of its content, and the caller states what it expects (array names and
-shapes, and any further check).  An entry that does not match (edited, damaged,
-written for another key, a folder in its place) is skipped with a
-:class:`CacheWarning` and the result recomputed; a cache that cannot be read or
-written (read-only, full disk) only costs time, with a warning.  Entries are
-written with the one atomic writer (``shapecond.output``).
+An entry is **checked, never trusted**: it carries its key and a keyed checksum
+of key and content (below), and the caller states what it expects (array names
+and shapes, and any further check).  An entry that does not match (edited,
+damaged, written for another key or by another cache, a folder, FIFO or link in
+its place: entries are opened only if they are regular files, never through a
+link, so reading one cannot block) is skipped with a :class:`CacheWarning` and
+the result recomputed; a cache that cannot be read or written (read-only, full
+disk) only costs time, with a warning.  Entries are written with the one atomic
+writer (``shapecond.output``).
 
-``shapecond cache info`` / ``shapecond cache clear`` show and empty the folder.
+**Integrity: a keyed checksum.** The checksum is an HMAC-SHA256 under a secret
+of the user's: ``.secret`` in the cache folder, 32 random bytes created with the
+cache (mode 0600), which must be a regular file owned by the user running
+shapecond and readable by nobody else, or the cache is not used (a warning; the
+results are computed).  Why: with a plain SHA-256 stored in the entry itself,
+whoever could write the folder could change an entry's content and recompute its
+checksum, and change results without a word (σ 0.50 instead of 0.68, every
+sample id shifted, exit status 0).  Binding an entry's name to its content
+cannot work for a cache (the key names the inputs; the content is what is
+expensive to recompute), and a mere statement that the folder's writers control
+the results would leave shared, group-writable or copied cache folders open.
+The secret makes a changed, planted or copied entry (from another user or
+another cache folder) a recomputation, not a wrong answer.  It does not protect
+against programs running as the same user, which can read the secret (and could
+as well change shapecond itself).  Workers that share a cache folder (``batch``
+and ``evaluate`` on a cluster) must therefore run as the same user; other users
+get a warning and compute without the cache.
+
+``shapecond cache info`` / ``shapecond cache clear`` show and empty the folder
+(``clear`` removes the secret too: a new one comes with the next entry).
 """
 
 from __future__ import annotations
 
 import hashlib
+import hmac
 import io
 import json
 import os
+import secrets
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from .checks import open_regular
 from .errors import InputError
 from .output import atomic_open
 
 #: Bumped when the layout of every entry changes (old entries are then ignored).
-FORMAT = "2"
+#: 3: keyed checksums (``__tag__``, ``"tag"``) instead of plain SHA-256 ones.
+FORMAT = "3"
+#: The cache's secret (module docstring), in the cache folder.
+SECRET_NAME = ".secret"
+SECRET_BYTES = 32
 
 
 class CacheWarning(UserWarning):
@@ -63,13 +91,67 @@ def key_of(*parts) -> str:
     return h.hexdigest()[:32]
 
 
-def _checksum(arrays: dict) -> str:
-    h = hashlib.sha256()
+def _tag(key: str, arrays: dict, secret: bytes) -> str:
+    """HMAC-SHA256 under ``secret`` of the key and of every array's name, dtype, shape and bytes."""
+    h = hmac.new(secret, f"{FORMAT}:{key}".encode(), hashlib.sha256)
     for name in sorted(arrays):
         a = np.ascontiguousarray(arrays[name])
         h.update(f"{name}{a.dtype.str}{a.shape}".encode())
         h.update(a.tobytes())
     return h.hexdigest()
+
+
+def _json_tag(key: str, payload, secret: bytes) -> str:
+    text = f"{FORMAT}:{key}:" + json.dumps(payload, sort_keys=True)
+    return hmac.new(secret, text.encode(), hashlib.sha256).hexdigest()
+
+
+def _read_secret(path: Path) -> bytes:
+    """The secret at ``path``; ``ValueError`` (``InputError``) unless it is a private file of this user."""
+    fd = open_regular(path, follow_links=False)
+    try:
+        st = os.fstat(fd)
+        data = os.read(fd, SECRET_BYTES + 1)
+    finally:
+        os.close(fd)
+    if hasattr(os, "geteuid") and st.st_uid != os.geteuid():
+        raise ValueError(f"the cache secret {path} belongs to another user")
+    if st.st_mode & 0o077:
+        raise ValueError(f"the cache secret {path} may be read by others (its mode must be 0600)")
+    if len(data) != SECRET_BYTES:
+        raise ValueError(f"the cache secret {path} is not {SECRET_BYTES} bytes long")
+    return data
+
+
+def _create_secret(path: Path) -> None:
+    """A new secret at ``path``, unless another process made one first (it is never replaced)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f"{SECRET_NAME}.{secrets.token_hex(8)}.tmp")
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o600)
+    try:
+        os.write(fd, secrets.token_bytes(SECRET_BYTES))
+        os.close(fd)
+        os.link(tmp, path)  # atomic, and fails rather than replace an existing secret
+    except FileExistsError:
+        pass
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def cache_secret(create: bool = False) -> bytes:
+    """The cache folder's secret (module docstring), made first if ``create`` and missing.
+
+    Raises ``ValueError`` (with the reason) when it is missing or not a private file of this user.
+    """
+    path = cache_dir() / SECRET_NAME
+    if create and not os.path.lexists(path):
+        try:
+            _create_secret(path)
+        except OSError as exc:
+            raise ValueError(f"cannot create the cache secret {path} ({exc.strerror or exc})") from None
+    if not os.path.lexists(path):
+        raise ValueError(f"the cache has no secret ({path}), so its entries cannot be checked")
+    return _read_secret(path)
 
 
 def _warn(message: str) -> None:
@@ -78,6 +160,12 @@ def _warn(message: str) -> None:
 
 def _path(kind: str, key: str, suffix: str) -> Path:
     return cache_dir() / f"{kind}-{key}{suffix}"
+
+
+def _open_entry(path: Path):
+    """A binary file object on a cache entry: a regular file, not reached through a link
+    (a FIFO planted in the folder must not block ``np.load``)."""
+    return os.fdopen(open_regular(path, follow_links=False), "rb")
 
 
 def load_arrays(kind: str, key: str, shapes: dict, check=None) -> dict | None:
@@ -93,14 +181,15 @@ def load_arrays(kind: str, key: str, shapes: dict, check=None) -> dict | None:
     if not os.path.lexists(path):
         return None
     try:
-        with np.load(path, allow_pickle=False) as z:
+        secret = cache_secret()
+        with _open_entry(path) as fh, np.load(fh, allow_pickle=False) as z:
             arrays = {name: z[name] for name in z.files}
         stored_key = str(arrays.pop("__key__", ""))
-        checksum = str(arrays.pop("__checksum__", ""))
+        tag = str(arrays.pop("__tag__", ""))
         if stored_key != key:
             raise ValueError("it was written for another input")
-        if checksum != _checksum(arrays):
-            raise ValueError("its checksum does not match its content")
+        if not hmac.compare_digest(tag, _tag(key, arrays, secret)):
+            raise ValueError("its keyed checksum does not match its content (edited, or written by another cache)")
         for name, shape in shapes.items():
             got = arrays.get(name)
             if got is None or got.ndim != len(shape) or any(s not in (-1, g) for s, g in zip(shape, got.shape)):
@@ -114,9 +203,14 @@ def load_arrays(kind: str, key: str, shapes: dict, check=None) -> dict | None:
 
 
 def save_arrays(kind: str, key: str, arrays: dict) -> None:
-    """Write entry ``kind``/``key`` with its key and checksum; warn if that fails."""
+    """Write entry ``kind``/``key`` with its key and keyed checksum; warn if that fails."""
     arrays = {name: np.asarray(a) for name, a in arrays.items()}
-    payload = dict(arrays, __key__=np.array(key), __checksum__=np.array(_checksum(arrays)))
+    try:
+        secret = cache_secret(create=True)
+    except ValueError as exc:
+        _warn(f"cache not written ({exc}); the result will be recomputed next time")
+        return
+    payload = dict(arrays, __key__=np.array(key), __tag__=np.array(_tag(key, arrays, secret)))
     buffer = io.BytesIO()
     np.savez(buffer, **payload)
     _store(_path(kind, key, ".npz"), buffer.getvalue())
@@ -128,12 +222,14 @@ def load_json(kind: str, key: str, check=None):
     if not os.path.lexists(path):
         return None
     try:
-        entry = json.loads(path.read_text(encoding="utf-8"))
+        secret = cache_secret()
+        with _open_entry(path) as fh:
+            entry = json.loads(fh.read().decode("utf-8"))
         if not isinstance(entry, dict) or entry.get("key") != key:
             raise ValueError("it was written for another input")
         payload = entry.get("payload")
-        if entry.get("checksum") != _json_checksum(payload):
-            raise ValueError("its checksum does not match its content")
+        if not hmac.compare_digest(str(entry.get("tag")), _json_tag(key, payload, secret)):
+            raise ValueError("its keyed checksum does not match its content (edited, or written by another cache)")
         if check is not None:
             check(payload)
     except Exception as exc:  # a damaged entry may fail in any way: it only costs time
@@ -142,15 +238,16 @@ def load_json(kind: str, key: str, check=None):
     return payload
 
 
-def _json_checksum(payload) -> str:
-    return hashlib.sha256(json.dumps(payload, sort_keys=True).encode()).hexdigest()
-
-
 def save_json(kind: str, key: str, payload) -> None:
     """Write JSON entry ``kind``/``key`` (payload: JSON-ready, ``inf`` as the string "inf")."""
+    try:
+        secret = cache_secret(create=True)
+    except ValueError as exc:
+        _warn(f"cache not written ({exc}); the result will be recomputed next time")
+        return
     # checksum what will be read back: JSON turns integer keys into strings, which sort differently
     payload = json.loads(json.dumps(payload, allow_nan=False))
-    entry = {"key": key, "checksum": _json_checksum(payload), "payload": payload}
+    entry = {"key": key, "tag": _json_tag(key, payload, secret), "payload": payload}
     _store(_path(kind, key, ".json"), json.dumps(entry, allow_nan=False).encode())
 
 
@@ -183,10 +280,15 @@ def info() -> dict:
 
 
 def clear() -> dict:
-    """Delete every entry (and leftover temporary files); return what was removed."""
+    """Delete every entry (and leftover temporary files, and the secret); return what was removed."""
     removed, size = 0, 0
     folder = cache_dir()
     leftovers = list(folder.glob(".*.tmp")) if folder.is_dir() else []
+    if os.path.lexists(folder / SECRET_NAME):  # not counted: no entry is left for it to check
+        try:
+            (folder / SECRET_NAME).unlink()
+        except OSError as exc:
+            raise InputError(f"{folder / SECRET_NAME}: cannot remove ({exc.strerror or exc})") from None
     for p in entries() + leftovers:
         try:
             n = p.lstat().st_size

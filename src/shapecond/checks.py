@@ -6,7 +6,11 @@ bad value gets the same one-line ``InputError`` from both:
 * numbers: :func:`check_int`, :func:`check_float` (ranges, NaN, infinities,
   overflow, booleans passed as numbers), :func:`check_seed`, :func:`check_choice`;
 * vertex ids: :func:`parse_ids` (``"3,5,9"``, a file of ids, or a sequence) and
-  :func:`read_ids` (a file: first column of each line, as BIM ``.pid`` files);
+  :func:`read_ids` (a file: every id on every line; ``ID 0 0 0`` is a BIM ``.pid``
+  vertex point);
+* files: :func:`open_regular` opens a file only if it is a regular file (a FIFO,
+  a device or a socket is refused before it is read, without blocking), and
+  optionally without following a symbolic link;
 * distance matrices: :func:`check_distance_matrix`, with the strictness of
   :func:`scipy.spatial.distance.is_valid_dm` (square, symmetric, zero diagonal)
   plus finite, real and non-negative entries;
@@ -24,15 +28,18 @@ Examples
 
 from __future__ import annotations
 
+import errno
 import math
 import numbers
+import os
+import stat
 import weakref
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.distance import is_valid_dm
 
-from .errors import InputError
+from .errors import InputError, OutputError
 
 #: Largest file of vertex ids read (a landmark file holds a few dozen lines).
 MAX_ID_FILE_BYTES = 16 * 2**20
@@ -148,57 +155,88 @@ def check_landmark_count(k, n: int, fixed=()) -> list[int]:
     return fixed
 
 
-def read_ids(path, name: str | None = None) -> list[int]:
-    """Vertex ids from a text file: the first column of each non-empty line.
+def _id_value(token: str, where: str) -> int:
+    """One vertex id: a non-negative integer (``12`` or ``12.0``); fractions, words and NaN refused."""
+    try:
+        value = int(token, 10)
+    except ValueError:
+        try:
+            f = float(token)
+        except ValueError:
+            raise InputError(f"{where}: {_fmt(token)} is not a vertex id") from None
+        if not (math.isfinite(f) and f.is_integer()):
+            raise InputError(f"{where}: {_fmt(token)} is not an integer vertex id") from None
+        value = int(f)
+    if not 0 <= value <= MAX_ID:
+        raise InputError(f"{where}: {_fmt(token)} is not a vertex id (0 .. {MAX_ID})")
+    return value
 
-    ``#`` starts a comment; columns may be separated by spaces, tabs or commas.
-    Refuses binary content, non-integer, negative, huge or repeated ids, an empty
-    file and files larger than ``MAX_ID_FILE_BYTES``, naming the file and line.
+
+def _line_ids(tokens: list[str], where: str) -> list[int]:
+    """The ids of one line of an id file: every column, except that a BIM ``.pid`` vertex point
+    ``ID 0 0 0`` is ``ID`` (as ids it would repeat 0) and a BIM point inside a triangle
+    (``FACE b1 b2 b3`` with fractional barycentric coordinates) is refused."""
+    if len(tokens) == 4:
+        try:
+            rest = [float(t) for t in tokens[1:]]
+        except ValueError:
+            rest = None
+        if rest is not None and all(math.isfinite(v) for v in rest):
+            if rest == [0.0, 0.0, 0.0]:
+                return [_id_value(tokens[0], where)]
+            if not all(v.is_integer() for v in rest):
+                raise InputError(f"{where}: {_fmt(' '.join(tokens))} is a point inside a triangle (BIM barycentric "
+                                 "coordinates), not vertex ids; give vertex ids (a .pid vertex line is ID 0 0 0)")
+    return [_id_value(t, where) for t in tokens]
+
+
+def _id_tokens(line: str) -> list[str]:
+    """The columns of one line of ids: ``#`` starts a comment; spaces, tabs and commas separate."""
+    return line.split("#")[0].replace(",", " ").split()
+
+
+def read_ids(path, name: str | None = None) -> list[int]:
+    """Vertex ids from a text file: every id on every non-empty line, in order.
+
+    Ids are separated by spaces, tabs, commas or new lines (``1 2 3``, ``1,2,3``
+    and one id per line are the same file); ``#`` starts a comment.  A line
+    ``ID 0 0 0`` is a vertex point of the Blended Intrinsic Maps benchmark's
+    ``.pid`` files and gives ``ID``; a ``.pid`` point inside a triangle (fractional
+    barycentric coordinates) is refused.  Nothing is dropped: fractional,
+    negative, huge, repeated or non-numeric ids, binary content, an empty file,
+    a file that is not a regular file (FIFO, device) and files larger than
+    ``MAX_ID_FILE_BYTES`` are refused, naming the file and line.
     """
     path = Path(path)
     label = name or path.name
+    fd = open_regular(path)
     try:
-        size = path.stat().st_size
-        if not path.is_file():
-            raise InputError(f"{path}: not a regular file of vertex ids")
+        size = os.fstat(fd).st_size
         if size > MAX_ID_FILE_BYTES:
             raise InputError(f"{label}: {size / 2**20:.0f} MB is too large for a file of vertex ids "
                              f"(at most {MAX_ID_FILE_BYTES // 2**20} MB)")
-        data = path.read_bytes()
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            data = fh.read(MAX_ID_FILE_BYTES + 1)
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    finally:
+        os.close(fd)
     if b"\0" in data:
         raise InputError(f"{label}: binary data, not a text file of vertex ids")
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
-        raise InputError(f"{label}: not UTF-8 text, expected one vertex id per line") from None
+        raise InputError(f"{label}: not UTF-8 text, expected vertex ids") from None
     ids = []
     for k, line in enumerate(text.splitlines(), 1):
-        line = line.split("#")[0].replace(",", " ").split()
-        if not line:
-            continue
-        tok = line[0]
-        try:
-            value = int(tok, 10)
-        except ValueError:
-            try:
-                f = float(tok)
-            except ValueError:
-                raise InputError(f"{label}:{k}: {_fmt(tok)} is not a vertex id") from None
-            if not (math.isfinite(f) and f.is_integer()):
-                raise InputError(f"{label}:{k}: {_fmt(tok)} is not an integer vertex id") from None
-            value = int(f)
-        if not 0 <= value <= MAX_ID:
-            raise InputError(f"{label}:{k}: {_fmt(tok)} is not a vertex id (0 .. {MAX_ID})")
-        ids.append(value)
+        ids += _line_ids(_id_tokens(line), f"{label}:{k}")
     if not ids:
         raise InputError(f"{label}: no vertex ids found")
     return check_ids(ids, label)
 
 
 def parse_ids(spec, name: str = "landmarks") -> list[int]:
-    """Vertex ids from ``"3,5,9"``, the path of a file of ids, or a sequence of ints.
+    """Vertex ids from ``"3,5,9"`` (or ``"3 5 9"``), the path of a file of ids, or a sequence of ints.
 
     ``None`` and ``""`` give ``[]``.  A string naming an existing file is read with
     :func:`read_ids`.
@@ -217,17 +255,87 @@ def parse_ids(spec, name: str = "landmarks") -> list[int]:
     text = spec.strip()
     if not text:
         return []
-    if len(text) < 4096 and Path(text).is_file():
+    if len(text) < 4096 and os.path.lexists(text) and not os.path.isdir(text):
         return read_ids(text)
-    tokens = [t for t in text.replace(" ", "").split(",") if t]
     ids = []
-    for tok in tokens:
+    for tok in _id_tokens(text):
         try:
-            ids.append(int(tok, 10))
-        except ValueError:
+            ids.append(_id_value(tok, name))
+        except InputError:
             raise InputError(f"{name}: {_fmt(tok)} is not a vertex id "
                              "(expected e.g. 12,405,877 or a file of ids)") from None
     return check_ids(ids, name)
+
+
+# --- files -----------------------------------------------------------------------------
+
+def _kind_problem(mode: int) -> str | None:
+    """Why a file of this ``st_mode`` is not a regular file (None if it is one)."""
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return "is a folder, not a file"
+    if stat.S_ISFIFO(mode):
+        return "is a FIFO (named pipe), not a regular file"
+    if stat.S_ISCHR(mode) or stat.S_ISBLK(mode):
+        return "is a device, not a regular file"
+    if stat.S_ISSOCK(mode):
+        return "is a socket, not a regular file"
+    return "is a symbolic link, which shapecond does not follow here"
+
+
+def open_regular(path, flags: int = os.O_RDONLY, *, follow_links: bool = True, create_mode: int = 0o644,
+                 output: bool = False) -> int:
+    """A descriptor of ``path`` opened with ``flags``, only if it is a regular file.
+
+    A folder, FIFO, device or socket is refused before anything is read from or
+    written to it: its kind is checked with ``stat`` before opening and with
+    ``fstat`` on the descriptor, which is opened with ``O_NONBLOCK`` (a FIFO
+    nobody writes to cannot make ``open`` block) and then made blocking.
+    ``follow_links=False`` refuses a symbolic link (``O_NOFOLLOW``): shapecond's
+    own files (batch tables, journals, locks, cache entries) are never reached
+    through one.
+
+    Parameters
+    ----------
+    path : str or path-like
+    flags : ``os.open`` flags, e.g. ``os.O_RDONLY`` or ``os.O_RDWR | os.O_CREAT``.
+    follow_links : open what a symbolic link points to (user inputs) or refuse the link.
+    create_mode : permissions of a file that ``O_CREAT`` creates (before the umask).
+    output : raise :class:`OutputError` ("cannot write") instead of :class:`InputError`.
+
+    Returns
+    -------
+    int : the descriptor (blocking); the caller closes it.
+    """
+    error, verb = (OutputError, "write") if output else (InputError, "read")
+    path = os.fspath(path)
+    try:
+        st = os.stat(path) if follow_links else os.lstat(path)
+    except FileNotFoundError:
+        st = None
+        if os.path.islink(path):
+            raise error(f"{path}: a symbolic link to a missing file ({os.readlink(path)})") from None
+        if not flags & os.O_CREAT:
+            raise error(f"{path}: no such file") from None
+    except OSError as exc:
+        raise error(f"{path}: cannot {verb} ({exc.strerror or exc})") from None
+    problem = None if st is None else _kind_problem(st.st_mode)
+    if problem:
+        raise error(f"{path}: {problem}")
+    nofollow = 0 if follow_links else getattr(os, "O_NOFOLLOW", 0)
+    try:
+        fd = os.open(path, flags | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0) | nofollow, create_mode)
+    except OSError as exc:  # changed since the check: a link (ELOOP), a socket (ENXIO), a folder
+        if exc.errno in (errno.ELOOP, errno.ENXIO, errno.EISDIR):
+            raise error(f"{path}: not a regular file") from None
+        raise error(f"{path}: cannot {verb} ({exc.strerror or exc})") from None
+    problem = _kind_problem(os.fstat(fd).st_mode)
+    if problem:
+        os.close(fd)
+        raise error(f"{path}: {problem}")
+    os.set_blocking(fd, True)
+    return fd
 
 
 # --- distance matrices ---------------------------------------------------------------

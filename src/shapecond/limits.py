@@ -70,6 +70,19 @@ def metric_bytes(n_targets: int, n_vertices: int) -> float:
     return 3 * 8.0 * n_targets**2 + min(4.0 * n_targets * n_vertices, 512 * 2**20)
 
 
+def lh05_affinity_bytes(n_points: int, n_landmarks: int, k: int = 20) -> float:
+    """Bytes of the dense float32 affinity matrix of LH05's first spectral round (``matching.spectral``).
+
+    Its C candidates are the landmark pairs and the ``k`` best free target samples of every free
+    source sample: C = L + (N - L) min(k, N - L), and the matrix holds C² entries (N = 5000, k = 20:
+    37 GB).  Matched with its first ``CORE_LANDMARKS`` landmarks as well (``matching.nested``), a
+    problem with more landmarks builds the larger matrix of fewer; pass that smaller L.
+    """
+    free = max(int(n_points) - int(n_landmarks), 0)
+    c = int(n_landmarks) + free * min(int(k), free)
+    return 4.0 * c * c
+
+
 def search_seconds(n_samples: int, n_targets: int | None = None, searches: float = 1.0) -> float:
     """Estimated seconds of ``searches`` default-effort witness searches (N samples, M targets).
 

@@ -14,6 +14,14 @@ by :func:`atomic_open`:
   failure.  A symbolic link planted at a temporary name is never followed: the
   name is skipped.  A symbolic link *at the target* is replaced by the new file;
   the file it pointed to is not touched;
+* a process killed after its temporary file got a name (SIGKILL between link and
+  rename, or anywhere with the named fallback) leaves a complete hidden
+  ``.NAME.<hex>.tmp`` behind, which the next write of the same target removes.
+  A writer holds an ``flock`` on its temporary file until the rename, so a
+  temporary file that can be locked has no live writer; links, FIFOs and other
+  files that are not regular at such names are left alone.  (With the named
+  fallback a concurrent writer's file is exposed for the instant between its
+  creation and its lock: the rename of that writer then fails in one line.)
 * a **stream** (a FIFO, a character device such as ``/dev/null``, or a symbolic
   link to one, e.g. ``/dev/stdout``) is written in one go once the content is
   complete; it is never replaced by a regular file.  A FIFO nobody reads
@@ -38,11 +46,12 @@ import contextlib
 import errno
 import io
 import os
+import re
 import secrets
 import stat
 from pathlib import Path
 
-from .errors import OutputError
+from .errors import InputError, OutputError
 
 _FLAGS = os.O_WRONLY | getattr(os, "O_CLOEXEC", 0)
 #: Write through an unnamed file (Linux O_TMPFILE) when the system has it.
@@ -52,6 +61,46 @@ USE_TMPFILE = hasattr(os, "O_TMPFILE")
 def _temp_name(folder: Path, name: str) -> Path:
     """A fresh random name beside the target (tests replace this to plant links)."""
     return folder / f".{name}.{secrets.token_hex(8)}.tmp"
+
+
+#: The end of a temporary name after ``.NAME.`` (``_temp_name``).
+_TEMP_TAIL = re.compile(r"[0-9a-f]{16}\.tmp")
+
+
+def _hold(fd: int) -> None:
+    """Lock a temporary file for as long as its writer lives (module docstring)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - no flock: stale temporary files are not collected
+        return
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+
+def _remove_stale_temps(folder: Path, name: str) -> None:
+    """Remove the temporary files of ``folder/name`` left by killed writers (module docstring)."""
+    try:
+        import fcntl
+
+        from .checks import open_regular
+
+        prefix = f".{name}."
+        stale = [e.name for e in os.scandir(folder)
+                 if e.name.startswith(prefix) and _TEMP_TAIL.fullmatch(e.name[len(prefix):])]
+    except (ImportError, OSError):
+        return
+    for tmp in stale:
+        try:
+            fd = open_regular(folder / tmp, follow_links=False)
+        except InputError:  # gone, a link, a FIFO...: not ours to remove
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # fails while its writer is alive
+            if os.lstat(folder / tmp).st_ino == os.fstat(fd).st_ino:
+                os.unlink(folder / tmp)
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
 
 
 def _reason(exc: OSError) -> str:
@@ -77,16 +126,21 @@ def _open_temp(folder: Path, name: str):
     """(fd, temporary path or None): an unnamed file in ``folder`` if the system allows it."""
     if USE_TMPFILE:
         try:
-            return os.open(folder, os.O_TMPFILE | _FLAGS, 0o666), None
+            fd = os.open(folder, os.O_TMPFILE | _FLAGS, 0o666)
         except OSError as exc:
             if exc.errno not in (errno.EOPNOTSUPP, errno.EISDIR, errno.EINVAL, errno.ENOENT):
                 raise
+        else:
+            _hold(fd)
+            return fd, None
     for _ in range(100):
         tmp = _temp_name(folder, name)
         try:
-            return os.open(tmp, _FLAGS | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o666), tmp
+            fd = os.open(tmp, _FLAGS | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o666)
         except FileExistsError:
             continue
+        _hold(fd)
+        return fd, tmp
     raise OSError(errno.EEXIST, "no free temporary name")
 
 
@@ -180,6 +234,7 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
             folder.mkdir(parents=True, exist_ok=True)
         elif not folder.is_dir():
             raise OutputError(f"{path}: the folder {folder} does not exist")
+        _remove_stale_temps(folder, path.name)
         fd, tmp = _open_temp(folder, path.name)
     except OSError as exc:
         raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None

@@ -47,6 +47,43 @@ def _ply_binary(V, F, n_faces_declared):
     return head + body
 
 
+def _sphere():
+    """(V, F) of a 162-vertex icosphere (enough vertices for ``match -n 30``)."""
+    import trimesh
+
+    s = trimesh.creation.icosphere(subdivisions=2)
+    return np.asarray(s.vertices), np.asarray(s.faces)
+
+
+def _special_files(d: Path) -> dict:
+    """Files that are not regular (FIFOs, a device) and the files a batch output must leave alone."""
+    made = {}
+
+    def fifo(name):
+        if not os.path.lexists(d / name):
+            os.mkfifo(d / name)
+        made[name] = d / name
+
+    def link(name, target):
+        if not os.path.lexists(d / name):
+            (d / name).parent.mkdir(parents=True, exist_ok=True)
+            os.symlink(target, d / name)
+        made[name] = d / name
+
+    fifo("fifo.off")
+    fifo("ids_fifo")
+    link("dev_zero.off", "/dev/zero")
+    for name, text in {"notes.jsonl": '{"note": 1}\n{"note": 2}\n{"tor', "victim.csv": "a,b\n1,2\n3,",
+                       "victim.txt": "precious\n"}.items():
+        (d / name).write_text(text)
+        made[name] = d / name
+    link("link.csv", d / "victim.csv")
+    link("planted_lock/.t.csv.lock", d / "victim.txt")
+    link("planted_journal/.t.parquet.journal", d / "victim.txt")
+    fifo("fifo.jsonl")
+    return made
+
+
 def make_files(folder) -> dict:
     """Write every bad (and one good) file into ``folder``; return name -> path."""
     d = Path(folder)
@@ -64,6 +101,9 @@ def make_files(folder) -> dict:
         "ids_repeated": "1\n1\n",
         "ids_empty_lines": "\n\n# nothing\n",
         "ids_words": "left paw\n",
+        "ids_fraction_in_line": "5, 7.5, 9\n",  # was read as [5]
+        "ids_bim_face_point": "12 0.5 0.5 0\n",  # a .pid point inside triangle 12, not vertex 12
+        "ids_coordinates": "12 0.25 0.5 0.75 1.5\n",  # an id followed by coordinates: was read as [12]
         # meshes
         "off_truncated_faces.off": _off(V, F[:1]).replace(f"4 1 0", "4 4 0"),
         "off_truncated_vertices.off": "OFF\n4 4 0\n0 0 0\n1 0 0\n",
@@ -81,6 +121,9 @@ def make_files(folder) -> dict:
         "off_disconnected.off": _off(np.vstack([V, V + 5]), np.vstack([F, F + 4])),
         "off_huge_scale.off": _off(V * 1e200, F),
         "off_tiny_scale.off": _off(V * 1e-200, F),
+        # a mesh scaled by 1e-25 and written with 10 decimals (trimesh's OFF export): every vertex at 0
+        "off_zero_size.off": _off(np.round(V * 1e-25, 10) + 0.0, F),
+        "off_zero_size_sphere.off": _off(np.round(_sphere()[0] * 1e-25, 10) + 0.0, _sphere()[1]),
         "ply_truncated.ply": _ply_ascii(V, F[:2], n_faces_declared=4),
         "ply_trailing.ply": _ply_ascii(V, F, extra="1 2 3\n"),
         "ply_binary_truncated.ply": _ply_binary(V, F[:1], 4),
@@ -129,6 +172,7 @@ def make_files(folder) -> dict:
     out["npz_named.npy"] = d / "npz_named.npy"
     np.savez(d / "npz_without_D.npz", X=np.zeros(3))
     out["npz_without_D.npz"] = d / "npz_without_D.npz"
+    out.update(_special_files(d))
     (d / "a_folder.off").mkdir(exist_ok=True)
     out["a_folder.off"] = d / "a_folder.off"
     out["missing.off"] = d / "missing.off"
@@ -163,7 +207,8 @@ BAD_DEMOS = ["demo:sphere:radius=0", "demo:sphere:radius=-1", "demo:sphere:radiu
 BAD_SHAPES = ["off_truncated_faces.off", "off_truncated_vertices.off", "off_trailing.off", "off_short_face.off",
               "off_words.off", "off_header_only.off", "off_not_off.off", "off_binary.off", "off_empty.off",
               "off_bad_index.off", "off_negative_counts.off", "off_nan.off", "off_zero_area.off",
-              "off_disconnected.off", "off_huge_scale.off", "off_tiny_scale.off", "ply_truncated.ply",
+              "off_disconnected.off", "off_huge_scale.off", "off_tiny_scale.off", "off_zero_size.off",
+              "ply_truncated.ply",
               "ply_trailing.ply", "ply_binary_truncated.ply", "ply_garbage.ply", "obj_short_face.obj",
               "obj_missing_vertex.obj", "obj_unknown.obj", "obj_short_vertex.obj", "stl_truncated.stl",
               "unknown_suffix.docx", "cloud_collinear.xyz", "cloud_ragged.xyz", "cloud_two_columns.xyz",
@@ -171,10 +216,11 @@ BAD_SHAPES = ["off_truncated_faces.off", "off_truncated_vertices.off", "off_trai
               "matrix_asymmetric.npy", "matrix_negative.npy", "matrix_nan.npy", "matrix_diagonal.npy",
               "matrix_zero.npy", "matrix_duplicate_points.npy", "matrix_two.npy", "array_3x3_bad.npy",
               "array_3d.npy", "array_strings.npy", "npz_named.npy", "npz_without_D.npz", "a_folder.off",
-              "missing.off"]
+              "missing.off", "fifo.off", "dev_zero.off"]
 
 BAD_IDS = ["ids_binary", "ids_latin1", "ids_nan", "ids_inf", "ids_huge", "ids_negative", "ids_fraction",
-           "ids_repeated", "ids_empty_lines", "ids_words"]
+           "ids_repeated", "ids_empty_lines", "ids_words", "ids_fraction_in_line", "ids_bim_face_point",
+           "ids_coordinates", "ids_fifo"]
 BAD_ID_TEXT = ["-1", "1,1", "a,b", "1.5", "nan", str(2**70), "3,,x"]
 
 #: (option, bad values, command line around it) for numeric options.
@@ -238,13 +284,14 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
     cases = []
 
     def add(cls, argv):
-        argv = [str(out / a) if a.startswith("OUT") else a for a in argv]
+        argv = [str(out / a) if str(a).startswith("OUT") else str(a) for a in argv]
         cases.append((cls, argv))
 
     for name in BAD_SHAPES:
         for cmd, build in SHAPE_COMMANDS.items():
             if cmd == "info" and name in ("off_zero_area.off", "off_disconnected.off", "off_nan.off",
-                                          "off_bad_index.off", "off_huge_scale.off", "off_tiny_scale.off"):
+                                          "off_bad_index.off", "off_huge_scale.off", "off_tiny_scale.off",
+                                          "off_zero_size.off"):
                 continue  # info reports these as problems (exit 0) instead of refusing
             add(f"shape file {name} / {cmd}", build(str(f[name])))
     for spec in BAD_DEMOS:
@@ -271,9 +318,31 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
     for kind in ("empty", "off_only", "garbage", "binary"):
         add(f"evaluate dataset with a {kind} file", ["evaluate", str(f[f"dataset_{kind}"]), "--out", "OUT_DIR",
                                                      "--no-cache"])
+    add("match of a mesh scaled by 1e-25 (written with 10 decimals) against itself at -n 30",
+        ["match", f["off_zero_size_sphere.off"], f["off_zero_size_sphere.off"], "--landmarks-source", "0",
+         "--landmarks-target", "0", "-n", "30", "--no-cache", "-o", "OUT.txt"])
+    big = "demo:sphere:subdivisions=6"  # 40,962 vertices: LH05 at -n 5000 needs a 37 GB affinity matrix
+    for force in ([], ["--force"]):
+        add(f"match -n 5000 refused up front for LH05's memory {' '.join(force)}".strip(),
+            ["match", big, big, "--landmarks-source", "0", "--landmarks-target", "0", "-n", "5000", "--no-cache",
+             "-o", "OUT.txt"] + force)
+    small = [GOOD, "--points", "8", "--no-cache"]
+    for mode in ([], ["--resume"], ["--overwrite"]):
+        for name in ("notes.jsonl", "victim.csv", "link.csv", "fifo.jsonl"):
+            add(f"batch output {name} {' '.join(mode)}".strip(), ["batch", *small, "--out", f[name], *mode])
+    add("batch output with a planted lock link",
+        ["batch", *small, "--out", f["planted_lock/.t.csv.lock"].parent / "t.csv"])
+    add("batch output with a planted journal link",
+        ["batch", *small, "--out", f["planted_journal/.t.parquet.journal"].parent / "t.parquet"])
     add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
     add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
     return cases
+
+
+def time_limit(cls: str) -> float:
+    """Seconds a case may take: 10 for those that used to hang (FIFOs, devices, batch outputs),
+    otherwise enough for a slow machine's first compilation of the numba kernels."""
+    return 10.0 if any(w in cls for w in ("fifo", "dev_zero", "batch output")) else 300.0
 
 
 def api_cases(folder) -> list[tuple[str, object]]:
@@ -318,6 +387,10 @@ def api_cases(folder) -> list[tuple[str, object]]:
         ("unknown matcher", lambda: sc.match(GOOD, GOOD, [0], [0], matcher="magic", n_points=8, cache=False)),
         ("resolve_fraction 2", lambda: sc.heatmap(GOOD, n_points=8, resolve_fraction=2, cache=False)),
         ("unknown score option", lambda: sc.score(GOOD, 8, colour="red")),
+        ("sc.match(..., refin=False)", lambda: sc.match(GOOD, GOOD, [0], [0], n_points=8, cache=False, refin=False)),
+        ("sc.landmarks(..., methd=)", lambda: sc.landmarks(GOOD, 2, "cnbs", 8, cache=False, methd="fps")),
+        ("sc.landmarks fps with a cnbs option", lambda: sc.landmarks(GOOD, 2, "fps", 8, cache=False, n_maps=3)),
+        ('sc.score(..., exact="yes")', lambda: sc.score(GOOD, 8, exact="yes", cache=False)),
         ("evaluate garbage", lambda: sc.evaluate(f["dataset_garbage"], cache=False)),
     ]
     return cases

@@ -143,8 +143,18 @@ def test_unknown_file_type_and_missing_file(tmp_path):
 
 
 def test_landmark_and_symmetry_files(tmp_path):
-    (tmp_path / "l.pid").write_text("12 0.1 0.2\n\n7 1 1\n")
+    (tmp_path / "l.pid").write_text("  12 0 0 0\n\n7 0.0 0.0 0.0\n")  # BIM .pid vertex points
     assert read_ids(tmp_path / "l.pid") == [12, 7]
+    for text in ("1 2 3\n", "1,2,3\n", "1\n2\n3\n", "1, 2 # left paw\n3.0\n"):  # every id, however written
+        (tmp_path / "l.txt").write_text(text)
+        assert read_ids(tmp_path / "l.txt") == [1, 2, 3], text
+    for text, message in (("5, 7.5, 9\n", "7.5' is not an integer vertex id"),
+                          ("12 0.5 0.5 0\n", "point inside a triangle"),
+                          ("12 0.1 0.2\n", "0.1' is not an integer vertex id"),
+                          ("1 2 2\n", "id 2 is repeated"), ("1 two\n", "'two' is not a vertex id")):
+        (tmp_path / "l.txt").write_text(text)
+        with pytest.raises(InputError, match=message):
+            read_ids(tmp_path / "l.txt")
     (tmp_path / "s.sym").write_text("2\n1\n3\n")
     assert list(read_symmetry_map(tmp_path / "s.sym")) == [1, 0, 2]
     (tmp_path / "bad.sym").write_text("0\n1\n")

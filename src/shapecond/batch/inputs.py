@@ -8,6 +8,7 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from ..checks import open_regular
 from ..errors import InputError
 from ..shapes.io import MESH_SUFFIXES
 
@@ -62,26 +63,40 @@ def expand_inputs(specs) -> list[str]:
     return out
 
 
-def content_hash(spec: str) -> str | None:
+def content_hash(spec: str) -> str:
     """SHA-256 of a shape's bytes (``.vert`` then ``.tri`` for a TOSCA pair; the text of a
-    ``demo:`` specification); None when the file cannot be read."""
+    ``demo:`` specification).
+
+    ``InputError`` when a file is missing, unreadable or not a regular file: a FIFO
+    or a device (``/dev/zero``) is refused before it is read (``checks.open_regular``),
+    so hashing never blocks or runs forever.
+    """
     h = hashlib.sha256()
     if spec.startswith("demo:"):
         h.update(spec.encode())
         return h.hexdigest()
     path = Path(spec)
     parts = [path, path.with_suffix(".tri")] if path.suffix.lower() == ".vert" else [path]
-    try:
-        for part in parts:
-            with open(part, "rb") as fh:
+    for part in parts:
+        fd = open_regular(part)
+        try:
+            with os.fdopen(fd, "rb") as fh:
                 for chunk in iter(lambda: fh.read(1 << 20), b""):
                     h.update(chunk)
-    except OSError:
-        return None
+        except OSError as exc:
+            raise InputError(f"{part}: cannot read ({exc.strerror or exc})") from None
     return h.hexdigest()
 
 
-def content_hashes(specs, threads: int = 8) -> list[str | None]:
-    """``content_hash`` of every spec, read by a few threads (hashing releases the GIL)."""
+def _hash_or_reason(spec: str) -> tuple[str | None, str | None]:
+    try:
+        return content_hash(spec), None
+    except InputError as exc:
+        return None, str(exc).splitlines()[0]
+
+
+def content_hashes(specs, threads: int = 8) -> list[tuple[str | None, str | None]]:
+    """``(content_hash, None)`` of every spec, or ``(None, why it cannot be read)``; read by a few
+    threads (hashing releases the GIL)."""
     with ThreadPoolExecutor(max_workers=threads) as pool:
-        return list(pool.map(content_hash, specs))
+        return list(pool.map(_hash_or_reason, specs))

@@ -129,7 +129,11 @@ def _check_file(spec: str, expected_hash: str | None) -> None:
         return
     if not os.path.exists(spec):
         raise InputError(f"no such file on worker {worker_name()} (every worker must see the input paths)")
-    if expected_hash is not None and content_hash(spec) != expected_hash:
+    try:
+        digest = content_hash(spec)
+    except InputError as exc:
+        raise InputError(f"on worker {worker_name()}: {exc}") from None
+    if expected_hash is not None and digest != expected_hash:
         raise InputError(f"the file on worker {worker_name()} differs from the one the batch hashed "
                          "(changed since, or another file at the same path)")
 

@@ -17,7 +17,8 @@ import statistics
 import time
 from dataclasses import dataclass, field
 
-from ..parallel import check_where, runner
+from .. import __version__
+from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
 from .rows import params_key, score_shape, with_defaults
@@ -61,6 +62,13 @@ def _failed_row(spec, digest, params, error) -> dict:
     return row
 
 
+def _unreadable_row(spec, params, reason) -> dict:
+    """The error row of a shape file that this process cannot read (missing, a FIFO, no permission)."""
+    row = schema.empty_row()
+    row.update(file=spec, params=params, version=__version__, worker=worker_name(), error=reason)
+    return row
+
+
 def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=None, resume=False,
               overwrite=False, progress=False) -> BatchSummary:
     """Score every shape named by ``inputs`` into the table ``out`` (see module docstring).
@@ -87,11 +95,15 @@ def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=No
     with Table(out, mode) as table:
         hashes = content_hashes(specs)
         have = {schema.row_key(r): r for r in table.rows}
-        keys = [(s, h, params) for s, h in zip(specs, hashes)]
+        keys = [(s, h, params) for s, (h, _) in zip(specs, hashes)]
+        unreadable = {s: why for s, (_, why) in zip(specs, hashes) if why}
         todo = [k for k in keys if k not in have]
-        where = "nothing to do"
-        if todo:
-            where = _score(table, todo, options, n_jobs, scheduler, progress)
+        for spec, _, _ in todo:  # the client cannot read it either: no worker would do better
+            if spec in unreadable:
+                table.append(_unreadable_row(spec, params, unreadable[spec]))
+        readable = [k for k in todo if k[0] not in unreadable]
+        where = (_score(table, readable, options, n_jobs, scheduler, progress) if readable
+                 else "this process" if todo else "nothing to do")
         done = {schema.row_key(r): r for r in table.rows}
         batch_rows = [done[k] for k in keys]
     return _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)

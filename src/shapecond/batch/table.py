@@ -2,19 +2,36 @@
 
 **Loss-free appends.** CSV and JSON Lines: each row is one line written by a
 single ``write`` on a file opened for appending, so a process killed between
-two rows (SIGKILL included) leaves only whole rows; a torn last line (power
-loss, full disk) is cut off when the table is opened again.  Parquet cannot be
-appended to (its footer comes last), so its rows go first to a journal beside
-it (``.NAME.journal``, JSON Lines as above) and the Parquet file is rewritten
-from all rows, atomically (temporary file, then rename), every few seconds and
-at the end.  The Parquet file is therefore always complete and readable; rows
-finished since its last rewrite wait in the journal, which the next batch on
-the same output (e.g. ``--resume``) folds in before doing anything else.
+two rows (SIGKILL included) leaves only whole rows; a write that fails (full
+disk) is undone before the one-line error, and a torn last line left by a
+power loss is cut off, with a warning, when the table is opened again.
+Parquet cannot be appended to (its footer comes last), so its rows go first
+to a journal beside it (``.NAME.journal``, JSON Lines as above) and the
+Parquet file is rewritten from all rows, atomically (``output.atomic_open``),
+every few seconds and at the end.  The Parquet file is therefore always
+complete and readable; rows finished since its last rewrite wait in the
+journal, which the next batch on the same output (e.g. ``--resume``) folds in
+before doing anything else.
+
+**Only its own table.** A file already at the output is read and recognised
+before anything is written to it: a CSV file must have exactly this version's
+header, every JSON Lines (or journal) line must be a row with exactly this
+version's columns, a Parquet file this version's columns.  Anything else (a
+user's notes, another program's CSV) is refused in one line and left as it was:
+never truncated, rewritten or appended to.  ``--overwrite`` empties only a
+batch table (any version's: its first columns are ``file``, ``content_hash``,
+``params``).  The table, its journal and its lock are opened without following
+symbolic links and must be regular files (``checks.open_regular``): a link, a
+FIFO, a device or a folder at any of these names is refused before it is
+opened for writing, so nothing is ever written through a planted link, and a
+FIFO cannot block the batch.  A full disk or a read-only folder is one
+``OutputError`` line (exit status 2).
 
 **One writer.** The table is locked through ``.NAME.lock`` with ``flock``,
 which the kernel releases when the process dies, so a killed batch leaves no
 stale lock; a second batch on the same output refuses, naming the holder's
-host and pid.  (Written here rather than with the ``filelock`` package: its
+host and pid.  The lock file is only rewritten when it holds nothing but such
+a line.  (Written here rather than with the ``filelock`` package: its
 ``flock`` lock leaves the lock file behind and its soft lock goes stale when
 the holder is killed.)  On a network file system the lock is only as good as
 the server's ``flock`` support.
@@ -22,15 +39,19 @@ the server's ``flock`` support.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import os
+import re
 import socket
 import time
+import warnings
 from pathlib import Path
 
-from ..errors import InputError
+from ..checks import open_regular
+from ..errors import InputError, OutputError
 from . import schema
 
 FORMATS = {".parquet": "parquet", ".csv": "csv", ".jsonl": "jsonl", ".ndjson": "jsonl"}
@@ -38,6 +59,10 @@ FORMATS = {".parquet": "parquet", ".csv": "csv", ".jsonl": "jsonl", ".ndjson": "
 #: and never more often than 5 times the last rewrite took, so that rewriting a
 #: large table does not slow the batch.
 SNAPSHOT_SECONDS = 2.0
+#: What a lock file holds (``OutputLock``); a file at the lock's name holding anything else is refused.
+LOCK_LINE = re.compile(r"host .*, pid \d+\n?")
+#: How every JSON Lines row of ours starts (``_json_line``: the columns in ``schema.NAMES`` order).
+ROW_START = b'{"file": '
 
 
 def table_format(path) -> str:
@@ -52,6 +77,10 @@ def table_format(path) -> str:
             raise InputError("writing .parquet needs pyarrow: pip install 'shapecond[parquet]' "
                              "(or write .csv / .jsonl)") from None
     return fmt
+
+
+def _write_error(path, exc: OSError) -> OutputError:
+    return OutputError(f"{path}: cannot write ({exc.strerror or exc.__class__.__name__})")
 
 
 # --- one writer per output ------------------------------------------------------------
@@ -69,7 +98,7 @@ class OutputLock:
         except ImportError:  # no flock on this platform: no protection against a second writer
             return self
         while True:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            fd = open_regular(self.path, os.O_RDWR | os.O_CREAT, follow_links=False, output=True)
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
@@ -77,21 +106,41 @@ class OutputLock:
                 os.close(fd)
                 raise InputError(f"{self.path.name[1:-5]} is being written by another batch ({holder}); "
                                  "wait for it to finish or choose another --out") from None
-            try:  # the previous holder may have removed the file between our open and flock
-                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
-            except FileNotFoundError:
-                same = False
-            if same:
+            if self._names(fd):  # the previous holder may have removed the file between our open and flock
                 break
             os.close(fd)
-        os.ftruncate(fd, 0)
-        os.write(fd, f"host {socket.gethostname()}, pid {os.getpid()}\n".encode())
+        try:
+            self._claim(fd)
+        except BaseException:
+            os.close(fd)
+            raise
         self.fd = fd
         return self
 
+    def _names(self, fd) -> bool:
+        """Whether the lock's name still refers to the file open as ``fd``."""
+        try:
+            return os.lstat(self.path).st_ino == os.fstat(fd).st_ino
+        except FileNotFoundError:
+            return False
+
+    def _claim(self, fd) -> None:
+        """Write our host and pid into the lock file, if it is one (empty or a previous holder's line)."""
+        st = os.fstat(fd)
+        old = os.pread(fd, 512, 0).decode(errors="replace")
+        if st.st_nlink != 1 or (old and not LOCK_LINE.fullmatch(old)):
+            raise OutputError(f"{self.path}: not a lock file of shapecond batch (it holds other data); "
+                              "remove it or choose another --out")
+        try:
+            os.ftruncate(fd, 0)
+            os.write(fd, f"host {socket.gethostname()}, pid {os.getpid()}\n".encode())
+        except OSError as exc:
+            raise _write_error(self.path, exc) from None
+
     def __exit__(self, *exc):
         if self.fd is not None:
-            self.path.unlink(missing_ok=True)
+            if self._names(self.fd):
+                self.path.unlink(missing_ok=True)
             os.close(self.fd)
             self.fd = None
         return False
@@ -100,31 +149,55 @@ class OutputLock:
 # --- append-only line files -------------------------------------------------------------
 
 class _LineFile:
-    """A file of whole lines, appended one ``write`` per line."""
+    """A file of whole lines, appended one ``write`` per line; never reached through a link."""
 
     def __init__(self, path: Path):
-        self.path, self.fd = path, None
+        self.path, self.fd, self.created = path, None, False
 
-    def read(self) -> list[str]:
-        """Its lines; a torn last line (no newline) is cut off the file first."""
-        if not self.path.exists():
-            return []
-        data = self.path.read_bytes()
-        if data and not data.endswith(b"\n"):
-            data = data[: data.rfind(b"\n") + 1]
-            os.truncate(self.path, len(data))
-        return data.decode("utf-8").splitlines()
+    def open(self) -> None:
+        """Open for reading and appending, creating it if missing (``OutputError`` for a link, FIFO, ...)."""
+        exists = os.path.lexists(self.path)
+        flags = os.O_RDWR | os.O_APPEND | (0 if exists else os.O_CREAT | os.O_EXCL)
+        self.fd = open_regular(self.path, flags, follow_links=False, output=True)
+        self.created = not exists
 
-    def open(self):
-        self.fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+    def read(self) -> tuple[list[str], bytes]:
+        """(its complete lines, the torn bytes after the last newline); the file is not changed."""
+        chunks, offset = [], 0
+        while True:
+            chunk = os.pread(self.fd, 1 << 20, offset)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            offset += len(chunk)
+        data = b"".join(chunks)
+        end = data.rfind(b"\n") + 1
+        return data[:end].decode("utf-8").splitlines(), data[end:]
+
+    def cut(self, n_bytes: int) -> None:
+        """Remove the last ``n_bytes`` (a torn line), once the file is known to be ours."""
+        try:
+            os.ftruncate(self.fd, os.fstat(self.fd).st_size - n_bytes)
+        except OSError as exc:
+            raise _write_error(self.path, exc) from None
 
     def write(self, line: str) -> None:
+        """Append one line; a failed write (full disk) is undone, leaving no torn line."""
         data = line.encode("utf-8")
-        while data:
-            data = data[os.write(self.fd, data):]
+        size = os.fstat(self.fd).st_size
+        try:
+            while data:
+                data = data[os.write(self.fd, data):]
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                os.ftruncate(self.fd, size)
+            raise _write_error(self.path, exc) from None
 
     def clear(self) -> None:
-        os.ftruncate(self.fd, 0)
+        try:
+            os.ftruncate(self.fd, 0)
+        except OSError as exc:
+            raise _write_error(self.path, exc) from None
 
     def close(self, remove=False) -> None:
         if self.fd is not None:
@@ -132,6 +205,53 @@ class _LineFile:
             self.fd = None
         if remove:
             self.path.unlink(missing_ok=True)
+
+
+# --- recognising our own table ----------------------------------------------------------
+
+def _columns_problem(names, where, strict: bool, ordered: bool = True) -> str | None:
+    """Why columns ``names`` are not those of this version's table (``strict``) or of any
+    version's (``--overwrite``); None when they are.  ``ordered``: in this version's order too
+    (CSV rows are appended by position; a JSON row is read by name)."""
+    same = tuple(names) == schema.NAMES if ordered else sorted(names) == sorted(schema.NAMES)
+    if strict and same:
+        return None
+    if set(schema.KEY) <= set(names):
+        if not strict:
+            return None
+        return f"{where}: its columns are not those of this version's batch table; use another --out or --overwrite"
+    return f"{where}: its columns are not those of a batch table (it is not one); choose another --out"
+
+
+def _csv_rows(lines, tail: bytes, where, strict: bool) -> list[dict]:
+    if not lines:
+        if tail:
+            raise InputError(f"{where}: not a batch table (no complete header line); choose another --out")
+        return []
+    problem = _columns_problem(next(csv.reader([lines[0]])), where, strict)
+    if problem:
+        raise InputError(problem)
+    return [schema.coerce_row(r) for r in csv.DictReader(lines)] if strict else []
+
+
+def _json_rows(lines, tail: bytes, where, strict: bool) -> list[dict]:
+    rows = []
+    for k, line in enumerate(lines, 1):
+        try:
+            obj = json.loads(line)
+        except ValueError:
+            obj = None
+        if not isinstance(obj, dict):
+            raise InputError(f"{where}:{k}: not a row of a batch table (it is not one); choose another --out")
+        problem = _columns_problem(list(obj), f"{where}:{k}", strict, ordered=False)
+        if problem:
+            raise InputError(problem)
+        if strict:
+            rows.append(schema.coerce_row(obj))
+    if tail and not ROW_START.startswith(tail[:len(ROW_START)]):
+        raise InputError(f"{where}: its last line is not a row of a batch table (it is not one); "
+                         "choose another --out")
+    return rows
 
 
 def _json_line(row: dict) -> str:
@@ -172,62 +292,76 @@ class Table:
         self._created = False
         self._last_snapshot, self._snapshot_cost, self._dirty = 0.0, 0.0, False
 
-    # opening: lock, read what is there, fold a journal in
+    # opening: check the output, lock, read and recognise what is there, fold a journal in
     def __enter__(self):
+        for path in {self.path, self.lines.path}:  # a link, FIFO, device or folder: refused before the lock
+            if os.path.lexists(path):
+                os.close(open_regular(path, os.O_RDONLY, follow_links=False, output=True))
         self.lock.__enter__()
         try:
             self._open()
         except BaseException:
-            self.lock.__exit__()
+            try:
+                self._discard()
+            finally:
+                self.lock.__exit__()
             raise
         return self
 
     def _open(self):
+        self._created = not os.path.lexists(self.path)
+        self.lines.open()
+        existing, tail = self._read()
         if self.mode == "overwrite":
-            self.path.unlink(missing_ok=True)
-            self.lines.path.unlink(missing_ok=True)
-        self._created = not self.path.exists()
-        existing = self._read()
-        if existing and self.mode == "new":
+            existing = []
+            self.lines.clear()
+        elif existing and self.mode == "new":
             raise InputError(f"{self.path} already holds {len(existing)} rows: pass --resume to add to it "
                              "or --overwrite to start again")
+        elif tail:  # only now that the file is known to be ours, and will be written to
+            self.lines.cut(len(tail))
+            warnings.warn(f"{self.lines.path}: cut its incomplete last line ({len(tail)} bytes), left by an "
+                          "interrupted batch", stacklevel=4)
         self.rows = existing
-        self.lines.open()
         if self.format == "csv" and os.fstat(self.lines.fd).st_size == 0:
             self.lines.write(_csv_line(schema.NAMES))
         if self.format == "parquet":
             self._snapshot()  # the file exists, readable, from the start; a journal is folded in
 
-    def _read(self) -> list[dict]:
+    def _read(self) -> tuple[list[dict], bytes]:
+        """(the rows already there, the torn bytes after the journal's last line), once the output and
+        journal are recognised as this batch's table (module docstring); nothing is changed."""
+        strict = self.mode != "overwrite"
         try:
-            if self.format == "jsonl":
-                return [schema.coerce_row(json.loads(line)) for line in self.lines.read() if line.strip()]
-            if self.format == "csv":
-                lines = self.lines.read()
-                if not lines:
-                    return []
-                reader = csv.DictReader(lines)
-                if tuple(reader.fieldnames or ()) != schema.NAMES:
-                    raise InputError(f"{self.path}: its columns are not those of this version's batch table; "
-                                     "use another --out or --overwrite")
-                return [schema.coerce_row(r) for r in reader]
-            rows = []
-            if self.path.exists():
-                import pyarrow.parquet as pq
-
-                table = pq.read_table(self.path)
-                if tuple(table.column_names) != schema.NAMES:
-                    raise InputError(f"{self.path}: its columns are not those of this version's batch table; "
-                                     "use another --out or --overwrite")
-                rows = [schema.coerce_row(r) for r in table.to_pylist()]
-            seen = {schema.row_key(r) for r in rows}
-            journal = [schema.coerce_row(json.loads(line)) for line in self.lines.read() if line.strip()]
-            return rows + [r for r in journal if schema.row_key(r) not in seen]
+            rows = self._read_parquet(strict) if self.format == "parquet" else []
+            lines, tail = self.lines.read()
+            parse = _csv_rows if self.format == "csv" else _json_rows
+            more = parse(lines, tail, self.lines.path, strict)
         except InputError:
             raise
         except Exception as exc:  # noqa: BLE001 - any reader failure means "not our table"
             raise InputError(f"{self.path}: not a readable batch table ({exc.__class__.__name__}); "
-                             "use another --out or --overwrite") from None
+                             "choose another --out") from None
+        seen = {schema.row_key(r) for r in rows}
+        return rows + [r for r in more if schema.row_key(r) not in seen], tail
+
+    def _read_parquet(self, strict: bool) -> list[dict]:
+        if self._created:
+            return []
+        import pyarrow.parquet as pq
+
+        with os.fdopen(open_regular(self.path, os.O_RDONLY, follow_links=False, output=True), "rb") as fh:
+            table = pq.read_table(fh)
+        problem = _columns_problem(table.column_names, self.path, strict)
+        if problem:
+            raise InputError(problem)
+        return [schema.coerce_row(r) for r in table.to_pylist()] if strict else []
+
+    def _discard(self) -> None:
+        """After a failure to open: close, and remove what this run created (no rows yet)."""
+        self.lines.close(remove=self.lines.created)
+        if self._created and self.format == "parquet" and os.path.lexists(self.path):
+            self.path.unlink()
 
     # writing
     def append(self, row: dict) -> None:
@@ -263,14 +397,12 @@ class Table:
     def __exit__(self, exc_type, *exc):
         try:
             if exc_type is not None and self._created and not self.rows:  # failed before any row: no file
-                self.lines.close(remove=True)
-                self.path.unlink(missing_ok=True)
+                self._discard()
             elif self.format == "parquet" and self.lines.fd is not None:
                 if self._dirty:
-                    self._snapshot()
+                    self._snapshot()  # if this fails, the journal stays for the next run
                 self.lines.close(remove=True)
-            else:
-                self.lines.close()
         finally:
+            self.lines.close()
             self.lock.__exit__()
         return False

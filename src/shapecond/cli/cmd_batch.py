@@ -18,7 +18,8 @@ EXIT_SOME_FAILED = 3
 @click.command("batch")
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
 @click.option("--out", "-o", "out", required=True, type=click.Path(dir_okay=False),
-              help="Output table: .parquet (needs pyarrow), .csv or .jsonl.")
+              help="Output table: .parquet (needs pyarrow), .csv or .jsonl; a regular file (not a link) "
+                   "that is missing, empty or a batch table.")
 @shape_options
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Work spent by the witness searches.")
@@ -30,7 +31,8 @@ EXIT_SOME_FAILED = 3
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
                    "LocalCluster with W workers.")
 @click.option("--resume", is_flag=True, help="Keep the rows in --out; score only the shapes without one.")
-@click.option("--overwrite", is_flag=True, help="Start --out afresh even if it holds rows.")
+@click.option("--overwrite", is_flag=True, help="Start --out afresh even if it holds rows (only a batch table "
+              "is emptied; any other file is refused).")
 @json_option
 def command(inputs, out, effort, what, jobs, scheduler, resume, overwrite, as_json, **kw):
     """Score every shape in INPUT... (files, folders, glob patterns) into one table.

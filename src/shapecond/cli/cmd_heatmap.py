@@ -12,14 +12,14 @@ from ..landmarks.cnbs import RESOLVE_FRACTION, heat_map
 from .cmd_landmarks import guess_up
 from ..limits import check_cost, search_seconds
 from ..errors import InputError
-from .common import (Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
-                     pop_shape_options, shape_options)
+from .common import (IDS_HELP, Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix,
+                     parse_ids, pop_shape_options, shape_options)
 
 
 @click.command("heatmap")
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
-@click.option("--landmarks", default=None, help="Vertex ids already fixed (comma-separated, or a file).")
+@click.option("--landmarks", default=None, help="Vertex ids already fixed: " + IDS_HELP + ".")
 @click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the heat map (PNG).")
 @click.option("--html", type=click.Path(dir_okay=False), default=None,
               help="Self-contained HTML page of the heat map (turn it, hover a vertex for its id and value).")

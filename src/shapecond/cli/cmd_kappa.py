@@ -12,7 +12,7 @@ import click
 
 from ..errors import InputError
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
-from .common import (Float, Int, build_shape, emit_json, fmt, info, json_option, parse_ids, pop_shape_options,
+from .common import (IDS_HELP, Float, Int, build_shape, emit_json, fmt, info, json_option, parse_ids, pop_shape_options,
                      progress_enabled, shape_options)
 
 #: Samples taken from a mesh when --points is not given.
@@ -22,7 +22,8 @@ DEFAULT_KAPPA_POINTS = 8
 @click.command("kappa")
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
-@click.option("--landmarks", default=None, help="Vertex ids (row indices for a matrix) fixed by every map.")
+@click.option("--landmarks", default=None, help="Vertex ids (row indices for a matrix) fixed by every map: "
+              + IDS_HELP + ".")
 @click.option("--trials", type=Int(1), default=20, show_default=True, help="Number of perturbed copies probed.")
 @click.option("--scale", type=Float(0.0, 10.0, lo_open=True), default=0.05, show_default=True,
               help="Random perturbation size, relative to the RMS distance.")

@@ -6,8 +6,8 @@ import click
 
 from ..landmarks import METHODS, SCORES, select_landmarks
 from ..limits import check_cost, search_seconds
-from .common import (Float, Int, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, parse_ids,
-                     pop_shape_options, progress_enabled, shape_options)
+from .common import (IDS_HELP, Float, Int, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix,
+                     parse_ids, pop_shape_options, progress_enabled, shape_options)
 
 
 def guess_up(shape, up):
@@ -44,7 +44,7 @@ def draw_landmarks(shape, result, png, ply, up, title):
               help="cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the "
                    "scale-aware score δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel "
                    "signature extrema); user (--user-landmarks); cnbs-local.")
-@click.option("--user-landmarks", default=None, help="For --method user: vertex ids (comma-separated) or a file.")
+@click.option("--user-landmarks", default=None, help="For --method user: vertex ids, " + IDS_HELP + ".")
 @click.option("--scores/--no-scores", default=None,
               help="Compute the symmetry score after each landmark (always on for cnbs; for the "
                    "baselines it costs one witness search per landmark).")

@@ -14,13 +14,13 @@ from ..deformation.heatmap import local_heatmap
 from ..deformation.local_score import ZERO_TOL, LocalProblem, LocalScore
 from ..api import require_mesh
 from ..shapes.io import load_input
-from .common import Float, emit_json, force_option, info, json_option, parse_ids
+from .common import IDS_HELP, Float, emit_json, force_option, info, json_option, parse_ids
 
 
 @click.command("local")
 @click.argument("input_spec", metavar="INPUT")
 @click.option("--landmarks", "-l", default=None,
-              help="Vertex ids (the file's own) to fix, e.g. 12,405,877, or a file of ids.")
+              help="Vertex ids (the file's own) to fix: " + IDS_HELP + ".")
 @click.option("--alpha", type=Float(*ALPHA_RANGE), default=DEFAULT_ALPHA, show_default=True,
               help="Weight of the stretching term against point-to-plane proximity (unit-area mesh).")
 @click.option("--energy", type=click.Choice(ENERGIES), default="springs", show_default=True,

@@ -10,13 +10,13 @@ import numpy as np
 
 from ..errors import InputError
 from ..output import write_bytes
-from .common import build_shape, emit_json, info, json_option, pop_shape_options, shape_options
+from .common import IDS_HELP, build_shape, emit_json, info, json_option, pop_shape_options, shape_options
 
 
 @click.command("sample")
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
-@click.option("--landmarks", default=None, help="Vertex ids placed first (comma-separated, or a file).")
+@click.option("--landmarks", default=None, help="Vertex ids placed first: " + IDS_HELP + ".")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="Output .npz file.")
 @json_option
 def command(input_spec, landmarks, output, as_json, **kwargs):

@@ -15,15 +15,15 @@ import click
 import numpy as np
 
 from ..symmetry.report import score_shape
-from .common import Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
+from .common import IDS_HELP, Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
     pop_shape_options, shape_options
 
 
 @click.command("score")
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
-@click.option("--landmarks", default=None, help="Input vertex ids fixed by every map, e.g. 12,405,877 "
-              "(row indices for a matrix), or a file of ids.")
+@click.option("--landmarks", default=None, help="Input vertex ids (row indices for a matrix) fixed by every "
+              "map: " + IDS_HELP + ".")
 @click.option("--exact", "exact", is_flag=True, help="Compute σ exactly (enumeration or branch and bound "
               "within --time-limit); by default only when enumeration is quick (N <= 9).")
 @click.option("--upper", is_flag=True, help="LP upper bound when σ is not known exactly (small N only).")

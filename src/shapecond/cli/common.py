@@ -25,6 +25,9 @@ from ..shapes.io import load_input, read_symmetry_map
 from ..shapes.metric import MetricShape
 
 DEFAULT_POINTS = 400
+#: How vertex ids are given, for the help of every ids option (``checks.parse_ids``, ``checks.read_ids``).
+IDS_HELP = ("comma- or space-separated (12,405,877) or a file of ids: every id on every line (1 2 3, 1,2,3 "
+            "or one per line; # comments); a BIM .pid line 'ID 0 0 0' gives ID; fractional ids are refused")
 
 
 def _option_name(param) -> str:

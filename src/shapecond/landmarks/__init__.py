@@ -30,6 +30,48 @@ METHODS = ("cnbs", "cnbs-scale", "cnbs-local", "fps", "pls", "hks", "user")
 SCORES = ("sigma", "scale")
 
 
+#: Keyword options of ``select_landmarks`` itself, which every method takes.
+COMMON_OPTIONS = ("scores", "effort", "fixed", "score", "epsilon")
+
+
+def method_options(method: str) -> frozenset:
+    """The keyword options ``select_landmarks`` takes with ``method``, read from the signatures of
+    the methods (``COMMON_OPTIONS`` and the method's own, e.g. ``resolve_fraction`` for cnbs)."""
+    import inspect
+
+    def own(f, *taken):
+        return set(inspect.signature(f).parameters) - set(taken)
+
+    if method in ("cnbs", "cnbs-scale"):
+        from .cnbs import cnbs_landmarks
+
+        extra = own(cnbs_landmarks, "D", "n_samples", "k", "fixed", "seed", "effort", "budget")
+    elif method == "cnbs-local":
+        extra = own(_local_landmarks, "shape", "k", "fixed")
+    elif method == "hks":
+        from .hks import hks_landmarks
+
+        extra = own(hks_landmarks, "shape", "k", "seed")
+    elif method == "user":
+        from .user import user_landmarks
+
+        extra = own(user_landmarks, "shape")
+    else:
+        extra = set()
+    return frozenset(extra | set(COMMON_OPTIONS))
+
+
+def check_method_options(method: str, options) -> None:
+    """``InputError`` for an unknown method or an option it does not take (cheap: call it before
+    computing anything, e.g. the geodesics of the shape)."""
+    if method not in METHODS:
+        raise InputError(f"unknown landmark method {method!r}; choose one of {', '.join(METHODS)}")
+    unknown = sorted(set(options) - method_options(method))
+    if unknown:
+        raise InputError(f"landmark method {method!r} has no option {unknown[0]!r} "
+                         f"(its options: {', '.join(sorted(method_options(method)))})")
+
+
 def monotone(values) -> list:
     """Lower bounds after 1, 2, ... landmarks made non-increasing: a map fixing more
     landmarks also fixes fewer, so a later bound is a bound of every earlier score too."""
@@ -108,8 +150,7 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     -------
     LandmarkResult
     """
-    if method not in METHODS:
-        raise InputError(f"unknown landmark method {method!r}; choose one of {', '.join(METHODS)}")
+    check_method_options(method, kw)
     score = score or ("scale" if method == "cnbs-scale" else "sigma")
     if score not in SCORES:
         raise InputError(f"unknown score {score!r}; choose sigma or scale")
@@ -169,4 +210,5 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps, score)
 
 
-__all__ = ["LandmarkResult", "METHODS", "SCORES", "monotone", "prefix_scores", "select_landmarks"]
+__all__ = ["LandmarkResult", "METHODS", "SCORES", "check_method_options", "method_options", "monotone",
+           "prefix_scores", "select_landmarks"]

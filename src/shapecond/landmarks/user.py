@@ -1,8 +1,9 @@
 """User-supplied landmarks (paper Section 7: hand-picked benchmark landmarks).
 
-A landmark file holds one vertex id per line in its first column, 0-based, in the
-input's own numbering, e.g. the Blended Intrinsic Maps benchmark files
-``bim_benchmark_landmarks/TOSCA/<class>.pid``.  Each id becomes the sample standing
+A landmark file holds vertex ids, 0-based, in the input's own numbering, in the
+format of ``checks.read_ids``: every id on every line (``1 2 3``, ``1,2,3`` or one
+per line), and ``ID 0 0 0`` for the vertex points of the Blended Intrinsic Maps
+benchmark files ``bim_benchmark_landmarks/TOSCA/<class>.pid``.  Each id becomes the sample standing
 for it (``result.sample_of_vertex``): the vertex itself when it is a sample (build
 the shape with ``landmarks=`` to make sure), otherwise the nearest sample.  Repeated
 samples are an error: two landmarks would collapse into one.
@@ -24,7 +25,7 @@ def user_landmarks(shape, ids=None, path=None) -> list[int]:
     ids : sequence of int, optional
         The input's own vertex ids (matrix row indices for a matrix input).
     path : str, optional
-        A landmark file (first column, 0-based ids); used when ``ids`` is None.
+        A landmark file (``checks.read_ids``: 0-based ids); used when ``ids`` is None.
     """
     if ids is None:
         if path is None:

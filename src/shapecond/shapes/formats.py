@@ -24,10 +24,12 @@ larger than ``MAX_INPUT_BYTES`` are refused before they are read.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 
+from ..checks import open_regular
 from ..errors import InputError, TooLargeError
 
 #: Largest shape file read unless forced (TOSCA's largest mesh is 5 MB as OFF).
@@ -44,23 +46,21 @@ PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort":
 
 
 def check_file(path: Path, force: bool = False) -> int:
-    """Size of a readable, non-empty regular file; ``InputError`` otherwise (before reading)."""
+    """Size of a readable, non-empty regular file; ``InputError`` otherwise (before reading).
+
+    A folder, FIFO, device or socket is refused without blocking (``checks.open_regular``).
+    """
+    fd = open_regular(path)
     try:
-        st = path.stat()
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    if path.is_dir():
-        raise InputError(f"{path}: is a folder, not a shape file")
-    if not path.is_file():
-        raise InputError(f"{path}: not a regular file")
-    if st.st_size == 0:
+        size = os.fstat(fd).st_size
+    finally:
+        os.close(fd)
+    if size == 0:
         raise InputError(f"{path}: the file is empty")
-    if st.st_size > MAX_INPUT_BYTES and not force:
-        raise TooLargeError(f"{path.name}: {st.st_size / 2**30:.1f} GB is larger than the "
+    if size > MAX_INPUT_BYTES and not force:
+        raise TooLargeError(f"{path.name}: {size / 2**30:.1f} GB is larger than the "
                             f"{MAX_INPUT_BYTES // 2**20} MB shapecond reads by default (use --force)")
-    return st.st_size
+    return size
 
 
 def read_text(path: Path, force: bool = False) -> str:
@@ -100,6 +100,8 @@ def off_header(lines, name):
         raise InputError(f"{name}: no OFF header")
     head = lines[0][0]
     if head.upper() not in OFF_KEYWORDS:
+        if not (head.isascii() and head.isprintable()):  # raw bytes would be quoted as mojibake
+            raise InputError(f"{name}: binary data, not an OFF file")
         raise InputError(f"{name}: not an OFF file (first word {head[:20]!r})")
     if "BINARY" in [t.upper() for t in lines[0][1:]]:
         raise InputError(f"{name}: binary OFF is not supported; save it as ASCII OFF")

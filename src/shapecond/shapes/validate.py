@@ -71,7 +71,9 @@ def mesh_problems(vertices: np.ndarray, faces: np.ndarray | None) -> list[str]:
         problems.append(f"{int(np.sum(~np.all(np.isfinite(vertices), axis=1)))} vertices have NaN or infinite coordinates")
     elif np.max(np.abs(vertices)) > MAX_COORD:
         problems.append(f"coordinates up to {np.max(np.abs(vertices)):.3g} are beyond +-{MAX_COORD:g}; rescale the shape")
-    elif faces is not None and 0 < unit_length(vertices) < MIN_SIZE:
+    elif faces is not None and unit_length(vertices) == 0:  # e.g. a tiny mesh written with fixed decimals
+        problems.append(f"all {vertices.shape[0]} vertices are at one point: the shape has no size")
+    elif faces is not None and unit_length(vertices) < MIN_SIZE:
         problems.append(f"the shape is {unit_length(vertices):.3g} across, below {MIN_SIZE:g}; rescale it")
     if faces is None:
         return problems
@@ -89,6 +91,8 @@ def mesh_problems(vertices: np.ndarray, faces: np.ndarray | None) -> list[str]:
     if size > 0:
         unit = (vertices - vertices.min(axis=0)) / size
         zero = repeated | (face_areas(unit, faces) <= ZERO_AREA_RTOL)
+    elif np.all(np.isfinite(vertices)):  # every face of a shape without size has zero area
+        zero = np.ones(faces.shape[0], dtype=bool)
     else:
         zero = repeated
     if np.any(zero):

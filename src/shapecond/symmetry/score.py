@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from shapecond.jsonable import jsonable
-from shapecond.errors import TooLargeError
+from shapecond.errors import InputError, TooLargeError
 from shapecond.limits import check_cost, search_seconds
 from shapecond.symmetry.resolution import coarse_to_fine, two_levels
 from shapecond.symmetry.search import _prepare, best_single_swap, witness_search
@@ -102,14 +102,19 @@ class SymmetryScore:
         })
 
 
+def check_exact(exact):
+    """``exact`` if it is "auto", True or False (a numpy bool too); ``InputError`` otherwise."""
+    if isinstance(exact, (bool, np.bool_)) or (isinstance(exact, str) and exact == "auto"):
+        return exact
+    raise InputError(f"exact must be 'auto', True or False, got {exact!r}")
+
+
 def _exact_wanted(exact, n, m, n_landmarks) -> bool:
-    if exact == "auto":
+    if check_exact(exact) == "auto":
         from shapecond.symmetry.exact import map_count
 
         return map_count(n, m, n_landmarks) <= AUTO_EXACT_MAPS
-    if isinstance(exact, bool):
-        return exact
-    raise ValueError(f"exact must be 'auto', True or False, got {exact!r}")
+    return bool(exact)
 
 
 def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, time_limit=10.0, seed=0,
