@@ -4,7 +4,7 @@ Usage:
     python benchmarks/bench_evaluate.py DATASET_DIR [--jobs 2] [--protocol both] [--out DIR]
     python benchmarks/bench_evaluate.py --from DIR [--dataset DATASET_DIR]   # summarise a run
 
-Runs ``shapecond.matching.evaluation.evaluate_dataset`` (the same as ``shapecond
+Runs ``shapecond.evaluation.evaluate_dataset`` (the same as ``shapecond
 evaluate``), writes the full report into --out, and puts a summary in
 benchmarks/RESULTS.md (section ``evaluate``): time and load, the scores σ and δ(ε)
 after 1/3/all landmarks, the mean errors per protocol and matcher beside the
@@ -201,7 +201,7 @@ def geometry_tables(data: dict, dataset: Path) -> str:
     """Landmark spread, first landmark against the mirror plane, and the ground truth's own distortion."""
     import numpy as np
 
-    from shapecond.matching.evaluation import class_shapes
+    from shapecond.evaluation.datasets import read_class
     from shapecond.matching.sampled import sample_surface, surface_at
     from shapecond.shapes.io import load_geometry, read_symmetry_map
     from shapecond.shapes.metric import metric_shape
@@ -221,7 +221,7 @@ def geometry_tables(data: dict, dataset: Path) -> str:
           "may prefer a wrong map.", "",
           "| class | targets | RMS / h (median, max) | median relative |", "|---|---|---|---|"]
     for cls in _classes(st):
-        paths = class_shapes(Path(dataset) / cls)
+        paths = list(read_class(Path(dataset) / cls).shapes)
         g = load_geometry(paths[0])
         shape = metric_shape(g, st["n_points"], backend=st["backend"], seed=st["seed"])
         r = shape.covering_radius
@@ -282,8 +282,8 @@ def main() -> None:
         if timing.exists():
             wall, peak = json.loads(timing.read_text()).values()
     else:
-        from shapecond.matching.evaluation import evaluate_dataset
-        from shapecond.matching.report import write_report
+        from shapecond.evaluation import evaluate_dataset
+        from shapecond.evaluation.report import write_report
 
         t0 = time.perf_counter()
         ev = evaluate_dataset(a.dataset, classes=a.classes.split(",") if a.classes else None,

@@ -372,79 +372,118 @@ def _matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict,
     return nbytes
 
 
+def _matcher_options(matcher: str, options: dict) -> dict:
+    """The sample matcher's own options, refused before any work when unknown."""
+    from .matching.pipeline import MATCHERS
+    from .matching.seeded import faq_match
+    from .matching.spectral import lh05_match
+
+    if matcher not in MATCHERS:
+        raise InputError(f"unknown matcher {matcher!r} (choose from {', '.join(MATCHERS)})")
+    known = set()
+    if matcher != "zoomout":
+        known = set(list(inspect.signature(lh05_match if matcher == "lh05" else faq_match).parameters)[4:]) - {"seed"}
+    if set(options) - known:  # refused before the geodesics, not as a TypeError after them
+        raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
+                         f"{matcher!r} (its options: {', '.join(sorted(known)) or 'none'})")
+    return options
+
+
+def _match_matrices(src, tgt, ids_s, ids_t, matcher, samples, seed, options, summary) -> MatchResult:
+    from .matching.pipeline import match_samples
+
+    if not (isinstance(src, np.ndarray) and isinstance(tgt, np.ndarray)):
+        raise InputError("match two meshes/point clouds or two distance matrices, not one of each")
+    if samples != "fps":
+        raise InputError("samples 'same-ids' needs two meshes or point clouds, not distance matrices")
+    if matcher == "zoomout":
+        raise InputError("the zoomout matcher needs two meshes or point clouds (a Laplace-Beltrami basis), "
+                         "not distance matrices")
+    for name, ids, D in (("source", ids_s, src), ("target", ids_t, tgt)):
+        bad = [v for v in ids if v >= D.shape[0]]
+        if bad:
+            raise InputError(f"{name} landmark {bad[0]} is out of range (rows 0..{D.shape[0] - 1})")
+    if tgt.shape[0] < src.shape[0]:
+        raise InputError(f"the target matrix has fewer rows ({tgt.shape[0]}) than the source ({src.shape[0]})")
+    sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, matcher, seed=seed, **options)
+    summary.update(n_points=int(src.shape[0]), matcher_info=sm.info)
+    return MatchResult(np.asarray(sm.t, dtype=np.int64), summary)
+
+
 def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
-          n_points: int = DEFAULT_POINTS, seed: int = 0, backend: str = "heat", dense: str = "distances",
+          n_points: int = DEFAULT_POINTS, seed: int = 0, backend: str = "heat", dense: str = "zoomout",
           samples: str = "fps", cache: bool = True, force: bool = False, largest_component: bool = False,
           **options) -> MatchResult:
     """Match ``source`` to ``target`` with corresponding landmarks fixed (input ids, same order).
 
-    Both shapes are meshes/point clouds (sampled with ``n_points`` FPS samples;
-    ``samples="same-ids"`` samples the target at the source's sample vertices) or
-    both distance matrices.  ``options`` go to the matcher (lh05: ``k``,
-    ``rounding``, ``refine``).
+    Parameters
+    ----------
+    source, target : two meshes/point clouds (any input of ``load``), or two distance matrices
+        (then the map is between their rows).
+    landmarks_source, landmarks_target : corresponding input vertex ids, same order.
+    matcher : "lh05" (Leordeanu–Hebert on ``n_points`` FPS samples, the paper's), "faq" (seeded
+        graph matching on the samples) or "zoomout" (from the landmarks alone; at least 3).
+    dense : how the map reaches every vertex: "zoomout" (landmark-anchored ZoomOut on the
+        Laplace–Beltrami bases, ``matching.zoomout``), or the plain extensions of the sample
+        map "distances" and "nearest" (``matching.dense``).
+    samples : "fps" (each shape its own samples) or "same-ids" (the target sampled at the
+        source's sample vertices: shapes with one vertex order; the summary gives the error).
+    **options : the sample matcher's own options (lh05: ``k``, ``rounding``, ``refine``...).
+
+    Returns
+    -------
+    MatchResult: ``.map[i]`` the target id of source id i (-1: a vertex dropped on loading).
     """
     from .limits import check_cost, geodesic_seconds, metric_bytes
-    from .matching.pipeline import MATCHERS, match_samples, match_shapes
+    from .matching.pipeline import MatchOptions, match_shapes
 
-    if matcher not in MATCHERS:
-        raise InputError(f"unknown matcher {matcher!r} (choose from {', '.join(MATCHERS)})")
-    from .matching.seeded import faq_match
-    from .matching.spectral import lh05_match
-
-    known = set(list(inspect.signature(lh05_match if matcher == "lh05" else faq_match).parameters)[4:]) - {"seed"}
-    if set(options) - known:  # refused before the geodesics, not as a TypeError after them
-        raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
-                         f"{matcher!r} (its options: {', '.join(sorted(known))})")
+    options = _matcher_options(matcher, options)
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     if len(ids_s) != len(ids_t):
         raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
     seed = check_seed(seed)
+    opts = MatchOptions(matcher=matcher, n_points=check_int(n_points, "n_points", lo=3), backend=backend, seed=seed,
+                        dense=dense, samples=samples, cache=bool(cache), matcher_options=options)
     src = load(source, largest_component=largest_component, force=force)
     tgt = load(target, largest_component=largest_component, force=force)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
     if isinstance(src, np.ndarray) or isinstance(tgt, np.ndarray):
-        if not (isinstance(src, np.ndarray) and isinstance(tgt, np.ndarray)):
-            raise InputError("match two meshes/point clouds or two distance matrices, not one of each")
-        if samples != "fps":
-            raise InputError("samples 'same-ids' needs two meshes or point clouds, not distance matrices")
-        for name, ids, D in (("source", ids_s, src), ("target", ids_t, tgt)):
-            bad = [v for v in ids if v >= D.shape[0]]
-            if bad:
-                raise InputError(f"{name} landmark {bad[0]} is out of range (rows 0..{D.shape[0] - 1})")
-        if tgt.shape[0] < src.shape[0]:
-            raise InputError(f"the target matrix has fewer rows ({tgt.shape[0]}) than the source ({src.shape[0]})")
-        sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, matcher, seed=seed, **options)
-        summary.update(n_points=int(src.shape[0]), matcher_info=sm.info)
-        return MatchResult(np.asarray(sm.t, dtype=np.int64), summary)
-    n_points = check_int(n_points, "n_points", lo=3)
+        return _match_matrices(src, tgt, ids_s, ids_t, matcher, samples, seed, options, summary)
     n = max(src.n_vertices, tgt.n_vertices)
     what = f"matching with {n_points} samples on {n} vertices ({backend} distances)"
     matcher_bytes = _matcher_bytes(matcher, n_points, len(ids_s), options, what)
     check_cost(what, 2 * geodesic_seconds(n, n_points, backend), 2 * metric_bytes(n_points, n) + matcher_bytes,
                force)
-    m = match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), matcher=matcher,
-                     n_points=n_points, backend=backend, seed=seed, dense=dense, cache=cache, samples=samples,
-                     **options)
+    m = match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), opts)
     lines = np.full(int(src.ids.max()) + 1, -1, dtype=np.int64)
     lines[src.ids] = tgt.ids[m.vertex_map]
     summary.update(n_points=n_points, n_source_vertices=int(src.n_vertices), n_target_vertices=int(tgt.n_vertices),
-                   backend=backend, dense=dense, samples=samples, matcher_info=m.sample_map.info)
+                   backend=backend, dense=dense, samples=samples,
+                   matcher_info=m.sample_map.info if m.sample_map is not None else {})
     if samples == "same-ids":
         summary.update(sample_error=m.info["sample_error"], exact=m.info["exact"])
     return MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)))
 
 
 def evaluate(dataset_dir, **options):
-    """The paper's Figure 7 evaluation on class folders (see ``matching.evaluation``).
+    """The paper's Figure 7 evaluation on class folders (``shapecond.evaluation``).
 
-    Every keyword argument goes to ``evaluate_dataset`` (classes, methods,
-    matchers, n_jobs, quick, n_points, seed, backend, cache, max_targets, force,
-    and any option added there).  Returns the ``Evaluation``; write its report
-    with ``shapecond.matching.report.write_report``.
+    Parameters
+    ----------
+    dataset_dir : a folder of class folders: meshes with one vertex order (TOSCA), or
+        ``shapes/`` + ``corres/*.vts`` folders (the remeshed releases), or one such class.
+    **options : fields of ``shapecond.evaluation.EvaluationOptions`` (classes, methods,
+        matchers, protocol, counts, n_points, seed, backend, cache, dense, n_jobs,
+        scheduler, quick, max_targets, progress, force); an unknown name is refused.
+
+    Returns
+    -------
+    Evaluation; write its report with ``shapecond.evaluation.report.write_report``.
     """
-    from .matching.evaluation import evaluate_dataset
+    from .evaluation import evaluate_dataset, evaluation_options
 
-    return evaluate_dataset(Path(dataset_dir), **options)
+    opts = evaluation_options(**options)
+    return evaluate_dataset(Path(dataset_dir), opts)
 
 
 # --- the stateful problem ------------------------------------------------------------

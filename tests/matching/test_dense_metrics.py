@@ -5,7 +5,7 @@ import pytest
 
 from shapecond.errors import InputError
 from shapecond.matching.metrics import cumulative_curve, errors_from_rows, normalise, summary
-from shapecond.matching.pipeline import match_shapes
+from shapecond.matching.pipeline import MatchOptions, match_shapes
 from shapecond.matching.sampled import insert_landmarks, sample_surface
 from shapecond.shapes.geometry import make_geometry
 from shapecond.shapes.synthetic import plane_patch
@@ -45,11 +45,11 @@ def pair():
     return src, uv_s, tgt, uv_t, ls, lt
 
 
-@pytest.mark.parametrize("matcher", ["lh05", "faq"])
-@pytest.mark.parametrize("dense", ["distances", "nearest"])
+@pytest.mark.parametrize("matcher, dense", [("lh05", "zoomout"), ("faq", "zoomout"), ("zoomout", "zoomout"),
+                                           ("lh05", "distances"), ("faq", "nearest")])
 def test_bent_copy_is_matched_end_to_end(pair, matcher, dense):
     src, uv_s, tgt, uv_t, ls, lt = pair
-    m = match_shapes(src, tgt, ls, lt, matcher=matcher, n_points=120, dense=dense)
+    m = match_shapes(src, tgt, ls, lt, MatchOptions(matcher=matcher, n_points=120, dense=dense, cache=False))
     assert m.vertex_map.shape == (src.n_vertices,)
     assert list(m.vertex_map[ls]) == list(lt)
     err = np.linalg.norm(uv_t[m.vertex_map] - uv_s, axis=1)   # geodesic = flat distance
@@ -60,23 +60,25 @@ def test_bent_copy_is_matched_end_to_end(pair, matcher, dense):
     assert flipped.mean() > 3 * err.mean()
 
 
-def test_distance_extension_beats_nearest_sample(pair):
+def test_zoomout_beats_the_distance_extension_which_beats_nearest_sample(pair):
     src, uv_s, tgt, uv_t, ls, lt = pair
     errs = {}
-    for dense in ("nearest", "distances"):
-        m = match_shapes(src, tgt, ls, lt, matcher="faq", n_points=120, dense=dense)
+    for dense in ("nearest", "distances", "zoomout"):
+        m = match_shapes(src, tgt, ls, lt, MatchOptions(matcher="faq", n_points=120, dense=dense, cache=False))
         errs[dense] = np.linalg.norm(uv_t[m.vertex_map] - uv_s, axis=1).mean()
-    assert errs["distances"] < errs["nearest"]
+    assert errs["zoomout"] < errs["distances"] < errs["nearest"], errs
 
 
 def test_bad_pairs_are_input_errors(pair):
     src, _, tgt, _, ls, lt = pair
     with pytest.raises(InputError, match="counts differ"):
-        match_shapes(src, tgt, ls, lt[:2], n_points=50)
+        match_shapes(src, tgt, ls, lt[:2], MatchOptions(n_points=50))
     with pytest.raises(InputError, match="out of range"):
-        match_shapes(src, tgt, ls, [0, 1, 10**6], n_points=50)
+        match_shapes(src, tgt, ls, [0, 1, 10**6], MatchOptions(n_points=50))
     with pytest.raises(InputError, match="unknown matcher"):
-        match_shapes(src, tgt, ls, lt, matcher="nope", n_points=50)
+        MatchOptions(matcher="nope")
+    with pytest.raises(InputError, match="at least 3 landmark"):
+        match_shapes(src, tgt, ls[:2], lt[:2], MatchOptions(matcher="zoomout"))
 
 
 def test_insert_landmarks_keeps_n_and_puts_landmarks_first(pair):

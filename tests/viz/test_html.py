@@ -254,8 +254,8 @@ def test_browser_decimated_page(browser, tmp_path):
 
 
 def test_browser_evaluation_report(browser, tmp_path):
-    from shapecond.matching.evaluation import evaluate_dataset
-    from shapecond.matching.report import write_report
+    from shapecond.evaluation import evaluate_dataset
+    from shapecond.evaluation.report import write_report
     from shapecond.shapes.synthetic import plane_patch
 
     root = tmp_path / "data"

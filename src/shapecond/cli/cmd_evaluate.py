@@ -1,8 +1,10 @@
 """``shapecond evaluate DATASET_DIR``: the paper's Figure 7 evaluation on class folders.
 
-Each sub-folder of DATASET_DIR is a class of shapes with the same vertex count
-and order (ground truth = identity on vertex ids).  See
-``shapecond.matching.evaluation`` for the protocol and ``report`` for the output.
+Each sub-folder of DATASET_DIR is a class: shapes with the same vertex count and
+order (ground truth = identity on vertex ids), or ``shapes/`` and ``corres/``
+folders of differently meshed shapes with ``.vts`` ground truth (the remeshed
+releases; DATASET_DIR may also be one such class).  See ``shapecond.evaluation``
+for the protocols and ``shapecond.evaluation.report`` for the output.
 
 Running on a Dask cluster: start a scheduler and workers that can read
 DATASET_DIR (and, ideally, share ``$SHAPECOND_CACHE``), then pass
@@ -19,13 +21,12 @@ from pathlib import Path
 import click
 
 from ..errors import InputError
-from ..matching.evaluation import PROTOCOLS, evaluate_dataset
-from ..matching.pipeline import MATCHERS
-from ..matching.report import by_protocol, correlations, protocols, write_report
+from ..api import evaluate
+from ..evaluation.report import by_protocol, correlations, protocols, write_report
+from ..evaluation.run import DEFAULT_METHODS, PROTOCOL_CHOICES
+from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..parallel import runner
 from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_option, progress_enabled
-
-DEFAULT_METHODS = "fps,pls,hks,cnbs,cnbs-scale"
 
 
 def _names(text, allowed=None, what="name"):
@@ -39,12 +40,27 @@ def _names(text, allowed=None, what="name"):
     return names
 
 
+def _counts(text) -> list[int]:
+    out = []
+    for tok in _names(text, what="landmark count"):
+        if not tok.isdigit() or int(tok) < 1:
+            raise InputError(f"--counts: {tok!r} is not a positive landmark count")
+        out.append(int(tok))
+    return out
+
+
 @click.command("evaluate")
 @click.argument("dataset_dir", type=click.Path(file_okay=False))
 @click.option("--classes", default=None, help="Comma-separated class folders [default: all].")
-@click.option("--methods", default=DEFAULT_METHODS, show_default=True,
+@click.option("--methods", default=",".join(DEFAULT_METHODS), show_default=True,
               help="Landmark methods (shapecond.landmarks).")
-@click.option("--matchers", default="lh05,faq", show_default=True, help="Matchers: lh05, faq.")
+@click.option("--matchers", default="lh05,faq,zoomout", show_default=True,
+              help="Matchers: lh05, faq (on samples, then the dense stage), zoomout (from the landmarks alone; "
+                   "not in the corresponding protocol, which matches samples).")
+@click.option("--counts", default="3", show_default=True,
+              help="Landmark counts matched besides all of the class's landmarks (e.g. 3,6).")
+@click.option("--dense", type=click.Choice(DENSE_STAGES), default="zoomout", show_default=True,
+              help="How maps reach every vertex: landmark-anchored ZoomOut, or the plain extensions.")
 @click.option("--jobs", "-j", type=Int(1, 1024), default=1, show_default=True,
               help="Parallel processes for the per-shape work (joblib; at most one per task and core).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="evaluation",
@@ -58,27 +74,28 @@ def _names(text, allowed=None, what="name"):
 @click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
               show_default=True)
 @click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
-@click.option("--protocol", type=click.Choice(PROTOCOLS + ("both",)), default="corresponding",
-              show_default=True,
-              help="corresponding: targets sampled at the null shape's sample vertices (the κ setting); "
-                   "independent: each target sampled by its own FPS; both.")
+@click.option("--protocol", type=click.Choice(PROTOCOL_CHOICES), default="auto", show_default=True,
+              help="auto: remeshed for classes with corres/*.vts, corresponding otherwise; corresponding: "
+                   "targets sampled at the null shape's sample vertices (the κ setting); independent: each "
+                   "target sampled by its own FPS; both: corresponding and independent; remeshed: dense maps "
+                   "between differently meshed shapes measured at the .vts reference points.")
 @click.option("--scheduler", default=None,
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
                    "LocalCluster with W workers.")
 @force_option
 @json_option
-def command(dataset_dir, classes, methods, matchers, jobs, out_dir, quick, points, max_targets,
+def command(dataset_dir, classes, methods, matchers, counts, dense, jobs, out_dir, quick, points, max_targets,
             seed, geodesic_backend, no_cache, protocol, scheduler, force, as_json):
-    """Landmarks on each null shape, matched to the rest of its class; a Markdown report."""
+    """Landmarks on each null shape, matched to the rest of its class; a Markdown and HTML report."""
     t0 = time.perf_counter()
+    counts = tuple(_counts(counts))
     with runner(jobs, scheduler) as run:  # one cluster for every stage of the evaluation
-        ev = evaluate_dataset(Path(dataset_dir), classes=_names(classes, what="class") or None,
-                              methods=_names(methods, what="method"),
-                              matchers=_names(matchers, MATCHERS, "matcher"), n_jobs=jobs,
-                              scheduler=run.client, quick=quick, n_points=points, seed=seed,
-                              backend=geodesic_backend, cache=not no_cache,
-                              progress=progress_enabled(), max_targets=max_targets, protocol=protocol,
-                              force=force)
+        ev = evaluate(Path(dataset_dir), classes=tuple(_names(classes, what="class")) or None,
+                      methods=tuple(_names(methods, what="method")),
+                      matchers=tuple(_names(matchers, MATCHERS, "matcher")), counts=counts, dense=dense,
+                      n_jobs=jobs, scheduler=run.client, quick=quick, n_points=points, seed=seed,
+                      backend=geodesic_backend, cache=not no_cache, progress=progress_enabled(),
+                      max_targets=max_targets, protocol=protocol, force=force)
     report = write_report(ev, out_dir)
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),

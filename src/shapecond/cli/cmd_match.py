@@ -11,7 +11,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..matching.pipeline import MATCHERS, SAMPLINGS
+from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLINGS
 from ..errors import InputError
 from ..output import atomic_open
 from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_option, parse_ids
@@ -25,7 +25,8 @@ from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_o
 @click.option("--landmarks-target", required=True,
               help="The corresponding vertex ids on TARGET, in the same order.")
 @click.option("--matcher", type=click.Choice(MATCHERS), default="lh05", show_default=True,
-              help="lh05: Leordeanu-Hebert spectral matching (the paper); faq: seeded graph matching.")
+              help="lh05: Leordeanu-Hebert spectral matching of the samples (the paper); faq: seeded graph "
+                   "matching of the samples; zoomout: from the landmarks alone (at least 3), by the dense stage.")
 @click.option("--points", "-n", type=Int(3, MAX_POINTS), default=400, show_default=True,
               help="Farthest-point samples per shape.")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random choice.")
@@ -42,8 +43,10 @@ from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_o
               help="fps: each shape gets its own farthest-point samples; same-ids: the target is sampled "
                    "at the source's sample vertices (shapes with a common vertex order; the evaluation's "
                    "corresponding protocol) and the summary reports the sample map's error.")
-@click.option("--dense", type=click.Choice(["distances", "nearest"]), default="distances",
-              show_default=True, help="How the sample map is extended to every source vertex.")
+@click.option("--dense", type=click.Choice(DENSE_STAGES), default="zoomout", show_default=True,
+              help="How the map reaches every source vertex: zoomout (the sample map extended, then refined by "
+                   "ZoomOut on the Laplace-Beltrami bases with the landmarks as anchors), or the plain "
+                   "extensions of the sample map (distances: local distance matching; nearest: nearest sample).")
 @click.option("--largest-component", is_flag=True, help="Keep only the largest connected component.")
 @click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),

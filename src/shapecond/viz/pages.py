@@ -282,26 +282,24 @@ def class_scene(geometry, sets: dict, scores: dict, cls: str):
                       views=DEFAULT_VIEWS, title=f"{cls}: null shape with each method's landmarks")
 
 
-def evaluation_page(ev, folder, text: str, max_vertices: int = 15_000) -> str:
-    """``report.html``: the report's Markdown ``text`` (tables, plots from ``folder``) and a viewer per class."""
-    from ..matching.evaluation import class_shapes, find_classes
-    from ..matching.report import score_table
+def evaluation_page(ev, folder, text: str, nulls: dict, max_vertices: int = 15_000) -> str:
+    """``report.html``: the report's Markdown ``text`` (tables, plots from ``folder``) and a viewer per class.
+
+    ``nulls[cls]``: the path of the class's null shape (None when it cannot be read any more).
+    """
     from ..shapes.io import load_geometry
 
     body = [markdown_html(text, folder), "<h2>Landmarks on the null shapes</h2>"]
-    scores = score_table(ev.landmarks)
-    try:
-        found = find_classes(Path(ev.settings["dataset"]), ev.settings["classes"])
-    except (InputError, OSError, KeyError):
-        found = {}
     for cls in ev.settings["classes"]:
-        if cls not in found:
+        path = nulls.get(cls)
+        if path is None:
             body.append(f"<p>{_html.escape(cls)}: the class folder is not readable any more; no viewer.</p>")
             continue
-        g = load_geometry(class_shapes(found[cls])[0])
+        g = load_geometry(path)
         sets = {d["method"]: d["vertices"] for d in ev.landmarks if d["cls"] == cls}
-        body.append(viewer(class_scene(g, sets, {m: scores.get((cls, m), {}) for m in sets}, cls), max_vertices,
-                           heading=cls))
+        scores = {d["method"]: {int(c): v for c, v in d.get("scores", {}).items()}
+                  for d in ev.landmarks if d["cls"] == cls}
+        body.append(viewer(class_scene(g, sets, scores, cls), max_vertices, heading=cls))
     return page("Landmark evaluation (paper Section 7, Figure 7)", body)
 
 
@@ -412,8 +410,8 @@ def read_truth(spec):
     return truth
 
 
-def write_evaluation_html(ev, folder, text: str) -> str:
+def write_evaluation_html(ev, folder, text: str, nulls: dict) -> str:
     """Write ``report.html`` (``evaluation_page``) into ``folder`` atomically; return its path."""
     from ..output import write_text
 
-    return str(write_text(Path(folder) / "report.html", evaluation_page(ev, folder, text)))
+    return str(write_text(Path(folder) / "report.html", evaluation_page(ev, folder, text, nulls)))

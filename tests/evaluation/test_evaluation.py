@@ -8,9 +8,10 @@ import pytest
 
 from shapecond.cli import main
 from shapecond.errors import InputError
-from shapecond.matching.evaluation import (Evaluation, MatchRecord, class_shapes, evaluate_dataset,
-                                          off_vertex_count)
-from shapecond.matching.report import correlation, markdown, write_report
+from shapecond.evaluation import Evaluation, MatchRecord, evaluate_dataset
+from shapecond.evaluation.datasets import off_vertex_count, read_class
+from shapecond.evaluation.landmark_sets import ShapeSetup, landmark_task
+from shapecond.evaluation.report import correlation, markdown, write_report
 from shapecond.shapes.synthetic import plane_patch
 
 
@@ -38,7 +39,7 @@ def dataset(tmp_path_factory):
 
 
 def test_null_shape_is_the_lowest_number(dataset):
-    names = [p.stem for p in class_shapes(dataset / "strip")]
+    names = [p.stem for p in read_class(dataset / "strip").shapes]
     assert names == ["strip0", "strip7", "strip12"]
     assert off_vertex_count(dataset / "strip" / "strip0.off") == 19 * 19
 
@@ -63,7 +64,7 @@ def test_evaluation_of_an_isometric_class(dataset, tmp_path):
     assert set(lm["scores"]) == {1, 3, 10} and len(lm["ids"]) == 10
     text = markdown(ev)
     assert "| strip | 10 |" in text and "Spearman" in text
-    assert "corresponding samples, matcher lh05" in text and "independent samples, matcher faq" in text
+    assert "corresponding protocol, matcher lh05" in text and "independent protocol, matcher faq" in text
     report = write_report(ev, tmp_path / "out")
     for prot in ("corresponding", "independent"):
         assert (tmp_path / "out" / f"score_vs_error_{prot}.png").stat().st_size > 1000
@@ -168,9 +169,7 @@ def test_scheduler_without_dask_is_an_input_error(dataset, tmp_path, capsys):
 
 
 def test_landmark_selection_is_cached(dataset):
-    from shapecond.matching.evaluation import landmark_task
-
-    args = ("strip", dataset / "strip" / "strip0.off", "fps", 4, 30, 0, "heat", True, True)
+    args = ("strip", dataset / "strip" / "strip0.off", "fps", 4, ShapeSetup(30, 0, "heat", True), True)
     from shapecond.shapes.metric import cache_dir
 
     first = landmark_task(*args)

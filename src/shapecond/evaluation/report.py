@@ -107,12 +107,14 @@ def markdown(ev, plots=()) -> str:
     out = ["# Landmark evaluation (paper Section 7, Figure 7)", "",
            f"Dataset `{st['dataset']}`; N = {st['n_points']} samples, {st['backend']} geodesics, "
            f"seed {st['seed']}{', quick mode' if st['quick'] else ''}. Null shape matched to "
-           "every other shape of its class (ground truth: identity on vertex ids). Errors in % "
-           "of half the target's geodesic diameter (paper) unless stated. Protocols: "
-           "*corresponding* — the target's samples are the null shape's sample vertices (the κ "
-           "setting; error of sample x = geodesic distance from T(x) to x's own vertex); "
+           "every other shape of its class. Protocols: "
+           "*corresponding* — shapes with one vertex order, the target's samples are the null shape's "
+           "sample vertices (the κ setting; error of sample x = geodesic distance from T(x) to x's own "
+           "vertex), errors in % of half the target's geodesic diameter (paper); "
            "*independent* — each target has its own FPS samples and the dense map is measured "
-           "at them.", "",
+           "at them; *remeshed* — every shape has its own mesh and `.vts` ground truth, the dense map "
+           f"({st.get('dense', 'zoomout')}) is measured at the reference points in the field's unit, "
+           "geodesic error / sqrt(target area).", "",
            "Timings (s): " + ", ".join(f"{k} {v:.0f}" for k, v in ev.seconds.items()), ""]
     floors = score_table(ev.landmarks, "floor")
     out += ["## Symmetry score after 1, 3 and all landmarks (Figure 7a)", "",
@@ -163,19 +165,23 @@ def _error_sections(ev, protocol, scores) -> list[str]:
     """Figure 7b tables, correlations and the other error measures of one protocol."""
     st = ev.settings
     methods, classes = st["methods"], st["classes"]
-    errs = mean_errors(ev.records)
+    key = "error_area" if protocol == "remeshed" else "error"
+    errs = mean_errors(ev.records, key)
+    unit = "geodesic error / sqrt(area)" if key == "error_area" else "% of half the geodesic diameter"
+    extra = [f"{c} / L" if c != 3 else "3 / L" for c in st.get("counts", [3])]
     out = []
     for matcher in st["matchers"]:
-        out += ["", f"## Mean error, {protocol} samples, matcher {matcher} (Figure 7b)", "",
-                "| class | " + " | ".join(f"{m} 3 / L" for m in methods) + " | best at 3 | lowest score at 3 |",
+        out += ["", f"## Mean error, {protocol} protocol, matcher {matcher} (Figure 7b; {unit})", "",
+                "| class | " + " | ".join(f"{m} {' / '.join(str(c) for c in st.get('counts', [3]))} / L"
+                                         for m in methods) + " | best at 3 | lowest score at 3 |",
                 "|---|" + "---|" * (len(methods) + 2)]
         for cls in classes:
             L = st["landmark_counts"][cls]
-            cnt = sorted({min(3, L), L})
+            cnt = sorted({min(c, L) for c in st.get("counts", [3])} | {L})
             cells, at3, sc3 = [], {}, {}
             for m in methods:
                 vals = [errs.get((cls, m, c, matcher)) for c in cnt]
-                cells.append(" / ".join(_fmt(v) for v in vals))
+                cells.append(" / ".join(_fmt(v, 2 if key == "error_area" else 3) for v in vals))
                 at3[m] = vals[0]
                 sc3[m] = scores.get((cls, m), {}).get(cnt[0])
             best = min((v, m) for m, v in at3.items() if v is not None)[1] if any(
@@ -190,18 +196,20 @@ def _error_sections(ev, protocol, scores) -> list[str]:
             out += ["", f"Spearman rank correlation between the score {name} and error ({matcher}, {n} "
                     f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}; within classes "
                     f"(mean of per-class ρ over {nw} classes): {_fmt(rw)}."]
-    cols = ("error_area", "sample_error", "exact", "recall", "objective_ratio")
+    cols = ("error_area", "sample_error", "exact", "recall", "objective_ratio", "flipped")
     tables = {c: mean_errors(ev.records, c) for c in cols}
-    out += ["", f"## Other measures, {protocol} samples", "",
+    pct = mean_errors(ev.records, "error")
+    out += ["", f"## Other measures, {protocol} protocol", "",
             "Means over the targets: error / sqrt(area); the sample map's own error; the fraction "
             "of samples mapped exactly, the recall of LH05's candidates and LH05's objective over "
-            "the true map's (corresponding samples only).", "",
+            "the true map's (corresponding samples only); the fraction of targets matched flipped "
+            "(remeshed classes with a reference symmetry).", "",
             "| class | method | matcher | L | % half diam. | / sqrt(area) | sample map % | exact | "
-            "recall | objective / truth |", "|---|---|---|---|---|---|---|---|---|---|"]
-    for key in sorted(errs):
-        cls, m, c, matcher = key
-        out.append(f"| {cls} | {m} | {matcher} | {c} | {_fmt(errs[key])} | "
-                   + " | ".join(_fmt(tables[col].get(key), 4 if col == "objective_ratio" else 3)
+            "recall | objective / truth | flipped |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for cell in sorted(pct):
+        cls, m, c, matcher = cell
+        out.append(f"| {cls} | {m} | {matcher} | {c} | {_fmt(pct[cell])} | "
+                   + " | ".join(_fmt(tables[col].get(cell), 4 if col == "objective_ratio" else 3)
                                 for col in cols) + " |")
     return out
 
@@ -290,6 +298,18 @@ def correlations(ev) -> dict:
     return out
 
 
+def null_shapes(ev) -> dict:
+    """Class -> path of its null shape, None for a class whose folder cannot be read any more."""
+    from shapecond.errors import InputError
+    from shapecond.evaluation.datasets import find_classes
+
+    try:
+        found = find_classes(Path(ev.settings["dataset"]), ev.settings["classes"])
+    except (InputError, OSError, KeyError):
+        found = {}
+    return {c: (found[c].null if c in found else None) for c in ev.settings["classes"]}
+
+
 def write_report(ev, out_dir) -> Path:
     """Write report.md, report.html (``viz.pages.evaluation_page``), results.json and the PNGs into
     ``out_dir``; return the report path."""
@@ -300,7 +320,7 @@ def write_report(ev, out_dir) -> Path:
     out_dir = Path(out_dir)
     plots = plot(ev, out_dir)
     path = write_text(out_dir / "report.md", markdown(ev, plots))
-    write_evaluation_html(ev, out_dir, markdown(ev, plots))
+    write_evaluation_html(ev, out_dir, markdown(ev, plots), null_shapes(ev))
     data = dict(ev.to_dict(), correlation=correlations(by_protocol(ev, protocols(ev)[0])),
                 correlation_by_protocol={p: correlations(by_protocol(ev, p)) for p in protocols(ev)})
     write_text(out_dir / "results.json", dumps(data, indent=1))

@@ -1,0 +1,167 @@
+"""Remeshed TOSCA: every shape remeshed on its own, with ``.vts`` ground truth (the FAUST_r layout).
+
+Usage:
+    python benchmarks/make_remeshed.py ../shared/data/tosca_hires [--out DIR] [--classes cat,dog]
+
+The field's benchmarks of non-rigid matching (remeshed FAUST and SCAPE, SHREC'19,
+SMAL_r, DT4D-H) give every shape its own triangulation, so that no matcher can
+profit from a shared vertex order.  This script makes that setting from TOSCA,
+whose shapes of a class share one triangulation:
+
+* each shape is remeshed **on its own** by isotropic remeshing (Botsch and
+  Kobbelt 2004, ``gpytoolbox.remesh_botsch``, 10 iterations, projected onto the
+  original surface, after making the triangles' winding consistent) to a target edge length giving about 5,000–8,000 vertices;
+  the target count of a shape is drawn from the CRC-32 of its name, so shapes of
+  one class get different vertex counts and connectivity, and the result is the
+  same on every run (the remesher is deterministic; checked below);
+* ``corres/NAME.vts`` holds, for every reference point j (the vertices of the
+  original class triangulation that every shape of the class references), the
+  1-based id of the remeshed vertex nearest to the original vertex j
+  (Euclidean, the remeshed surface lies on the original one).  Shapes a and b of
+  a class then correspond at (vts_a[j], vts_b[j]), as in the remeshed releases;
+* ``shapes/NAME.off`` is the remeshed mesh; only its largest connected
+  component is kept (remeshing can leave slivers where the original has holes).
+
+Output: ``DIR/CLASS/shapes/*.off`` and ``DIR/CLASS/corres/*.vts``; default DIR is
+the ``datasets/tosca_remeshed`` folder of the shapecond cache (never committed).
+Shapes already written are kept (delete the folder to remake them).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+import zlib
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+#: Target vertex counts: each shape draws one in [LOW, HIGH) from the CRC-32 of its name.
+LOW, HIGH = 5000, 8000
+ITERATIONS = 10
+
+
+def read_off(path: Path):
+    """(V, F) of an ASCII OFF file (the TOSCA files); comments and blank lines skipped."""
+    tokens = [ln.split() for ln in path.read_text().splitlines() if ln.strip() and not ln.startswith("#")]
+    assert tokens[0][0] == "OFF", path
+    nv, nf = int(tokens[1][0]), int(tokens[1][1])
+    V = np.array(tokens[2:2 + nv], dtype=np.float64)
+    F = np.array([t[1:4] for t in tokens[2 + nv:2 + nv + nf]], dtype=np.int64)
+    return V, F
+
+
+def write_off(path: Path, V, F) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    lines = ["OFF", f"{len(V)} {len(F)} 0"]
+    lines += [f"{x:.6f} {y:.6f} {z:.6f}" for x, y, z in V]
+    lines += [f"3 {a} {b} {c}" for a, b, c in F]
+    tmp = path.with_suffix(".tmp")
+    tmp.write_text("\n".join(lines) + "\n")
+    tmp.replace(path)
+
+
+def largest_component(V, F):
+    """Vertices and faces of the largest connected component (by vertex count), reindexed."""
+    n = len(V)
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    A = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    _, lab = sp.csgraph.connected_components(A, directed=False)
+    used = np.zeros(n, dtype=bool)
+    used[F.ravel()] = True
+    counts = np.bincount(lab[used], minlength=lab.max() + 1)
+    keep = (lab == np.argmax(counts)) & used
+    new = -np.ones(n, dtype=np.int64)
+    new[keep] = np.arange(keep.sum())
+    Fk = F[keep[F[:, 0]]]
+    return V[keep], new[Fk]
+
+
+def target_count(name: str) -> int:
+    return LOW + zlib.crc32(name.encode()) % (HIGH - LOW)
+
+
+def remesh(V, F, name: str):
+    import gpytoolbox as gp
+    import trimesh
+
+    # consistent winding first: on TOSCA centaur3/4 (some flipped triangles) the remesher
+    # otherwise grows without bound until the process is killed for memory
+    mesh = trimesh.Trimesh(V, F, process=False)
+    trimesh.repair.fix_winding(mesh)
+    F = np.asarray(mesh.faces, dtype=np.int64)
+    used = np.unique(F)
+    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1).sum()
+    n = target_count(name)
+    h = np.sqrt(area / (2 * n) * 4 / np.sqrt(3))  # n vertices: about 2n equilateral triangles
+    remap = -np.ones(len(V), dtype=np.int64)
+    remap[used] = np.arange(used.size)
+    U, G = gp.remesh_botsch(V[used], remap[F].astype(np.int32), ITERATIONS, h, True)
+    return largest_component(np.asarray(U, dtype=np.float64), np.asarray(G, dtype=np.int64))
+
+
+def class_shapes(folder: Path) -> list[Path]:
+    import re
+
+    def key(p):
+        m = re.search(r"(\d+)$", p.stem)
+        return (int(m.group(1)) if m else 10**9, p.stem)
+
+    return sorted(folder.glob("*.off"), key=key)
+
+
+def make_class(folder: Path, out: Path) -> list[str]:
+    paths = class_shapes(folder)
+    meshes = {p.stem: read_off(p) for p in paths}
+    referenced = None
+    for V, F in meshes.values():
+        used = np.zeros(len(V), dtype=bool)
+        used[F.ravel()] = True
+        referenced = used if referenced is None else referenced & used
+    ref = np.flatnonzero(referenced)  # reference points: original vertices every shape references
+    lines = []
+    for name, (V, F) in meshes.items():
+        off, vts = out / "shapes" / f"{name}.off", out / "corres" / f"{name}.vts"
+        if off.exists() and vts.exists():
+            continue
+        t0 = time.perf_counter()
+        U, G = remesh(V, F, name)
+        U2, G2 = remesh(V, F, name) if name == next(iter(meshes)) else (U, G)
+        if not (np.array_equal(U, U2) and np.array_equal(G, G2)):
+            sys.exit(f"{name}: the remesher gave two different meshes for the same input")
+        _, nearest = cKDTree(U).query(V[ref])
+        write_off(off, U, G)
+        vts.parent.mkdir(parents=True, exist_ok=True)
+        vts.write_text("\n".join(str(int(i) + 1) for i in nearest) + "\n")
+        lines.append(f"{folder.name}/{name}: {len(V)} -> {len(U)} vertices, {len(ref)} reference points, "
+                     f"{time.perf_counter() - t0:.1f} s")
+        print(lines[-1], file=sys.stderr)
+    return lines
+
+
+def default_out() -> Path:
+    from shapecond.cache import cache_dir
+
+    return cache_dir() / "datasets" / "tosca_remeshed"
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("source", type=Path, help="folder of TOSCA class folders (e.g. ../shared/data/tosca_hires)")
+    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--classes", default=None, help="comma-separated class names (default: every class)")
+    a = ap.parse_args(argv)
+    out = a.out or default_out()
+    wanted = a.classes.split(",") if a.classes else None
+    for folder in sorted(p for p in a.source.iterdir() if p.is_dir()):
+        if (wanted and folder.name not in wanted) or not any(folder.glob("*.off")):
+            continue
+        make_class(folder, out / folder.name)
+    print(out)
+
+
+if __name__ == "__main__":
+    main()
