@@ -1,0 +1,125 @@
+"""The landmark sets of an evaluation: each method's landmarks on a null shape, and their scores.
+
+Every method runs on the null shape's metric shape (N samples); the landmarks
+are recorded as internal vertex ids of the null shape (``vertices``) and as the
+file's ids (``ids``).  Cached on disk: CNBS at N = 400 takes minutes per class.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from .. import cache as disk
+from ..errors import InputError
+
+#: Landmark counts of the paper's Figure 7 per TOSCA class (other classes: ``DEFAULT_LANDMARKS``).
+PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog": 12,
+                   "centaur": 7, "cat": 7, "wolf": 5}
+DEFAULT_LANDMARKS = 10
+#: bump when the landmark methods change, to invalidate cached selections
+LANDMARK_CACHE_VERSION = "8"  # 8: HKS on the robust Laplace-Beltrami basis; 7: CNBS kicks of at most 12 swaps
+#: Relative cost of the landmark methods on TOSCA at N = 400, for ordering the tasks only.
+LANDMARK_COST = {"cnbs-scale": 4, "cnbs": 3, "cnbs-local": 2, "hks": 1}
+
+
+@dataclass(frozen=True)
+class ShapeSetup:
+    """How every shape of an evaluation is sampled: N, FPS seed, geodesic backend, cache."""
+
+    n_points: int = 400
+    seed: int = 0
+    backend: str = "heat"
+    cache: bool = True
+
+
+def check_method(name: str) -> None:
+    """``InputError`` for an unknown landmark method (before any work)."""
+    from ..landmarks import METHODS
+
+    if name not in METHODS:
+        raise InputError(f"unknown landmark method {name!r} (choose from {', '.join(METHODS)})")
+
+
+def sigma_lower_bound(D, n_samples, landmarks, seed=0, quick=False) -> float:
+    """σ (Eq. 5) with the given sample indices fixed: the witness search's lower bound.
+
+    At N = 400 only the lower bound with its witness is affordable (no exact solve,
+    no LP); ``quick`` uses ``effort="quick"``.
+    """
+    from ..symmetry.score import symmetry_score
+
+    res = symmetry_score(D, n_samples, list(landmarks), exact=False, upper=False, seed=seed,
+                         effort="quick" if quick else "default")
+    return float(res.sigma_lower)
+
+
+def swap_floor(D, n_samples, landmarks) -> float:
+    """σ of the best single swap avoiding the landmarks."""
+    from ..symmetry.search import best_single_swap
+
+    return float(best_single_swap(D, n_samples, list(landmarks))[0])
+
+
+def _scores(shape, idx, seed) -> dict:
+    """σ, its swap floor and δ(ε) after 1, 3 and all landmarks (δ made non-increasing)."""
+    from ..landmarks import monotone
+    from ..symmetry.scale import scale_score
+
+    scores, floor, scale = {}, {}, {}
+    counts = sorted({1, min(3, len(idx)), len(idx)})
+    for c in counts:
+        scores[c] = sigma_lower_bound(shape.D, shape.n_samples, idx[:c], seed, True)
+        floor[c] = swap_floor(shape.D, shape.n_samples, idx[:c])
+        scale[c] = scale_score(shape.D, shape.n_samples, idx[:c], seed=seed, effort="quick").displacement
+    return dict(scores=scores, floor=floor, scale=dict(zip(counts, monotone([scale[c] for c in counts]))))
+
+
+def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, quick: bool = False) -> dict:
+    """Landmarks of one method on the null shape and the scores after 1, 3 and k of them.
+
+    Scores: the quick witness search's σ for every method alike, so that Figure 7a
+    compares one estimator (CNBS's own heat-map values are lower bounds from warm
+    starts and would not be comparable with the baselines'); ``floor``: the best
+    single swap with the same landmarks, to show when a score is only that;
+    ``scale``: δ(ε) at the default ε (``symmetry.scale``), non-increasing in the count.
+    """
+    from ..landmarks import select_landmarks
+    from ..shapes.io import load_geometry
+    from ..shapes.metric import metric_shape
+
+    st = Path(null_path).stat()
+    key = disk.key_of(LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size, st.st_mtime_ns,
+                      method, k, setup.n_points, setup.seed, setup.backend, quick)
+    d = disk.load_json("landmarks", key, _check_entry) if setup.cache else None
+    if d is not None:
+        for name in ("scores", "floor", "scale"):
+            d[name] = {int(c): float(v) for c, v in d[name].items()}
+        return d
+    t0 = time.perf_counter()
+    shape = metric_shape(load_geometry(null_path), setup.n_points, backend=setup.backend, seed=setup.seed,
+                         cache=setup.cache)
+    idx = [int(i) for i in select_landmarks(shape, k, method, seed=setup.seed).sample_indices][:k]
+    seconds = time.perf_counter() - t0
+    out = dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
+               ids=[int(v) for v in shape.sample_ids[idx]], **_scores(shape, idx, setup.seed),
+               seconds=seconds, score_source="search")
+    if setup.cache:
+        disk.save_json("landmarks", key, {**out, "scores": {c: _json_float(v) for c, v in out["scores"].items()},
+                                          "floor": {c: _json_float(v) for c, v in out["floor"].items()}})
+    return out
+
+
+def _json_float(v: float):
+    return "inf" if v == math.inf else v
+
+
+def _check_entry(d) -> None:
+    """Refuse a cached landmark selection that does not have the expected fields."""
+    for name in ("cls", "method", "vertices", "ids", "scores", "floor", "scale", "seconds"):
+        if name not in d:
+            raise InputError(f"field {name!r} is missing")
+    if len(d["vertices"]) != len(d["ids"]) or not all(isinstance(v, int) and v >= 0 for v in d["vertices"]):
+        raise InputError("its landmark vertices are not vertex indices")
