@@ -20,7 +20,10 @@ whose shapes of a class share one triangulation:
   (Euclidean, the remeshed surface lies on the original one).  Shapes a and b of
   a class then correspond at (vts_a[j], vts_b[j]), as in the remeshed releases;
 * ``shapes/NAME.off`` is the remeshed mesh; only its largest connected
-  component is kept (remeshing can leave slivers where the original has holes).
+  component is kept (remeshing can leave slivers where the original has holes);
+* ``corres/reference.sym``, when the source has ``symmetries/CLASS.sym`` (TOSCA's
+  left–right maps of the original vertices): line j holds the 1-based reference
+  point mirroring reference point j, so that the evaluation can count flips.
 
 Output: ``DIR/CLASS/shapes/*.off`` and ``DIR/CLASS/corres/*.vts``; default DIR is
 the ``datasets/tosca_remeshed`` folder of the shapecond cache (never committed).
@@ -113,6 +116,18 @@ def class_shapes(folder: Path) -> list[Path]:
     return sorted(folder.glob("*.off"), key=key)
 
 
+def write_reference_symmetry(sym_file: Path, ref: np.ndarray, out: Path) -> None:
+    """``corres/reference.sym`` from a map of original vertex ids (1-based, one line per vertex)."""
+    sym = np.loadtxt(sym_file, dtype=np.int64) - 1
+    pos = -np.ones(max(int(sym.max()), int(ref.max())) + 1, dtype=np.int64)
+    pos[ref] = np.arange(ref.size)
+    mirror = pos[sym[ref]]
+    if np.any(mirror < 0):
+        sys.exit(f"{sym_file}: the mirror of a reference point is not a reference point")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text("\n".join(str(int(i) + 1) for i in mirror) + "\n")
+
+
 def make_class(folder: Path, out: Path) -> list[str]:
     paths = class_shapes(folder)
     meshes = {p.stem: read_off(p) for p in paths}
@@ -122,6 +137,9 @@ def make_class(folder: Path, out: Path) -> list[str]:
         used[F.ravel()] = True
         referenced = used if referenced is None else referenced & used
     ref = np.flatnonzero(referenced)  # reference points: original vertices every shape references
+    sym_file = folder.parent / "symmetries" / f"{folder.name}.sym"
+    if sym_file.is_file():
+        write_reference_symmetry(sym_file, ref, out / "corres" / "reference.sym")
     lines = []
     for name, (V, F) in meshes.items():
         off, vts = out / "shapes" / f"{name}.off", out / "corres" / f"{name}.vts"

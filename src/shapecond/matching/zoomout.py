@@ -138,10 +138,15 @@ def farthest_points(points: np.ndarray, m: int) -> np.ndarray:
     return out
 
 
-def functional_map(phi_s: np.ndarray, weights: np.ndarray, phi_t_of_map: np.ndarray) -> np.ndarray:
-    """``C = argmin Σ_x w_x ‖Φ_s[x] C − Φ_t[T x]‖²``: the k × k map pulling target functions back."""
+def functional_map(phi_s: np.ndarray, weights: np.ndarray, phi_t_of_map: np.ndarray, gram=None) -> np.ndarray:
+    """``C = argmin Σ_x w_x ‖Φ_s[x] C − Φ_t[T x]‖²``: the k × k map pulling target functions back.
+
+    ``gram``: ``Φ_sᵀ W Φ_s`` when already known (its leading k × k block serves every k).
+    """
     A = phi_s * weights[:, None]
-    return np.linalg.solve(phi_s.T @ A, A.T @ phi_t_of_map)
+    k = phi_s.shape[1]
+    G = phi_s.T @ A if gram is None else gram[:k, :k]
+    return np.linalg.solve(G, A.T @ phi_t_of_map)
 
 
 def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarray, initial: np.ndarray,
@@ -167,15 +172,19 @@ def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarra
     k_end = levels[-1]
     sigma = options.sigma if options.sigma is not None else math.pi / math.sqrt(max(target.evals[k_end - 1], 1e-12))
     fs, ft = anchors.features(sigma) if anchors is not None else (None, None)
-    S = farthest_points(np.asarray(source_points, dtype=np.float64), options.subsample_factor * k_end)
-    _, cell = cKDTree(source_points[S]).query(source_points)
+    points = np.asarray(source_points, dtype=np.float64)
+    S = farthest_points(points, options.subsample_factor * k_end)
+    _, cell = cKDTree(points[S]).query(points)
     w = np.bincount(cell, weights=source.mass, minlength=S.size)
+    phi_s = np.ascontiguousarray(source.evecs[S, :k_end])
+    phi_t = np.ascontiguousarray(target.evecs[:, :k_end])
+    gram = phi_s.T @ (phi_s * w[:, None])
     TS = T[S]
     for k in levels:
-        C = functional_map(source.evecs[S, :k], w, target.evecs[TS, :k])
-        TS = _pointwise(source.evecs[S, :k], target.evecs[:, :k] @ C.T, None if fs is None else fs[S], ft)
-    C = functional_map(source.evecs[S, :k_end], w, target.evecs[TS, :k_end])
-    T = _pointwise(source.evecs[:, :k_end], target.evecs[:, :k_end] @ C.T, fs, ft)
+        C = functional_map(phi_s[:, :k], w, phi_t[TS, :k], gram)
+        TS = _pointwise(phi_s[:, :k], phi_t[:, :k] @ C.T, None if fs is None else fs[S], ft)
+    C = functional_map(phi_s, w, phi_t[TS], gram)
+    T = _pointwise(source.evecs[:, :k_end], phi_t @ C.T, fs, ft)
     if anchors is not None:
         T[anchors.source] = anchors.target
     return T
