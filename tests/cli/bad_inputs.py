@@ -192,6 +192,35 @@ def make_files(folder) -> dict:
         bad = cls / "shape1.off"
         bad.write_bytes(content) if isinstance(content, bytes) else bad.write_text(content)
         out[f"dataset_{kind}"] = d / f"dataset_{kind}"
+    out.update(_remeshed_datasets(d, good))
+    return out
+
+
+#: Remeshed class folders (shapes/ + corres/*.vts) whose ground truth cannot hold.
+BAD_VTS = {"vts_short": ("1\n2\n3\n4\n", "1\n2\n3\n"),       # unequal reference counts
+           "vts_out_of_range": ("1\n2\n3\n4\n", "1\n2\n3\n9\n"),  # the tetrahedron has 4 vertices
+           "vts_zero_based": ("1\n2\n3\n4\n", "0\n1\n2\n3\n"),   # a 0: 0-based by mistake
+           "vts_two_per_line": ("1\n2\n3\n4\n", "1 2\n3\n4\n1\n"),
+           "vts_fraction": ("1\n2\n3\n4\n", "1\n2.5\n3\n4\n"),
+           "vts_missing": ("1\n2\n3\n4\n", None)}              # shape1 has no .vts
+
+
+def _remeshed_datasets(d, good) -> dict:
+    out = {}
+    for kind, (first, second) in BAD_VTS.items():
+        cls = d / f"dataset_{kind}" / "cls"
+        (cls / "shapes").mkdir(parents=True, exist_ok=True)
+        (cls / "corres").mkdir(exist_ok=True)
+        for name, vts in (("shape0", first), ("shape1", second)):
+            (cls / "shapes" / f"{name}.off").write_text(good)
+            if vts is not None:
+                (cls / "corres" / f"{name}.vts").write_text(vts)
+        out[f"dataset_{kind}"] = d / f"dataset_{kind}"
+    plain = d / "dataset_no_corres" / "cls"  # a class with one vertex order asked for the remeshed protocol
+    plain.mkdir(parents=True, exist_ok=True)
+    for name in ("shape0", "shape1"):
+        (plain / f"{name}.off").write_text(good)
+    out["dataset_no_corres"] = d / "dataset_no_corres"
     return out
 
 
@@ -318,6 +347,13 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
     for kind in ("empty", "off_only", "garbage", "binary"):
         add(f"evaluate dataset with a {kind} file", ["evaluate", str(f[f"dataset_{kind}"]), "--out", "OUT_DIR",
                                                      "--no-cache"])
+    for kind in BAD_VTS:
+        add(f"evaluate dataset remeshed {kind}", ["evaluate", str(f[f"dataset_{kind}"]), "--out", "OUT_DIR",
+                                                  "--no-cache"])
+    add("evaluate dataset without corres/ under --protocol remeshed",
+        ["evaluate", str(f["dataset_no_corres"]), "--protocol", "remeshed", "--out", "OUT_DIR", "--no-cache"])
+    add("evaluate dataset with .vts files under --protocol corresponding",
+        ["evaluate", str(f["dataset_vts_short"]), "--protocol", "corresponding", "--out", "OUT_DIR", "--no-cache"])
     add("match of a mesh scaled by 1e-25 (written with 10 decimals) against itself at -n 30",
         ["match", f["off_zero_size_sphere.off"], f["off_zero_size_sphere.off"], "--landmarks-source", "0",
          "--landmarks-target", "0", "-n", "30", "--no-cache", "-o", "OUT.txt"])
@@ -392,6 +428,14 @@ def api_cases(folder) -> list[tuple[str, object]]:
         ("sc.landmarks fps with a cnbs option", lambda: sc.landmarks(GOOD, 2, "fps", 8, cache=False, n_maps=3)),
         ('sc.score(..., exact="yes")', lambda: sc.score(GOOD, 8, exact="yes", cache=False)),
         ("evaluate garbage", lambda: sc.evaluate(f["dataset_garbage"], cache=False)),
+        ("evaluate unknown option", lambda: sc.evaluate(f["dataset_garbage"], cache=False, matcher="lh05")),
+        ("evaluate n_jobs 0", lambda: sc.evaluate(f["dataset_garbage"], cache=False, n_jobs=0)),
+        *[(f"evaluate remeshed {kind}", lambda kind=kind: sc.evaluate(f[f"dataset_{kind}"], cache=False))
+          for kind in BAD_VTS],
+        ("match zoomout with 2 landmarks", lambda: sc.match(GOOD, GOOD, [0, 1], [0, 1], matcher="zoomout",
+                                                           cache=False)),
+        ("match zoomout on matrices", lambda: sc.match(np.ones((4, 4)) - np.eye(4), np.ones((4, 4)) - np.eye(4),
+                                                       [0, 1, 2], [0, 1, 2], matcher="zoomout")),
     ]
     return cases
 

@@ -1,0 +1,77 @@
+"""The dense stage: nearest rows, functional maps, and ZoomOut recovering known maps."""
+
+import numpy as np
+import pytest
+
+from shapecond.errors import InputError
+from shapecond.matching.zoomout import Anchors, ZoomOutOptions, functional_map, nearest_rows, zoomout
+from shapecond.shapes.geodesics import DistanceSolver
+from shapecond.shapes.laplace import laplace_basis
+from shapecond.shapes.synthetic import bumpy_blob
+
+
+def test_nearest_rows_is_the_brute_force_argmin():
+    rng = np.random.default_rng(0)
+    for n, m, d in ((50, 70, 3), (300, 2500, 40)):  # more rows than one block too
+        X, Y = rng.normal(size=(n, d)), rng.normal(size=(m, d))
+        brute = np.argmin(((X[:, None, :] - Y[None, :, :]) ** 2).sum(-1), axis=1)
+        got = nearest_rows(X, Y)
+        # float32 products may swap two near-equal candidates: the chosen one is as near
+        dist = lambda idx: ((X - Y[idx]) ** 2).sum(1)  # noqa: E731
+        np.testing.assert_allclose(dist(got), dist(brute), rtol=1e-4, atol=1e-5)
+
+
+def test_functional_map_of_the_identity_is_the_identity_matrix():
+    b = laplace_basis(bumpy_blob(subdivisions=3), k=20, cache=False)
+    C = functional_map(b.evecs, b.mass, b.evecs)
+    np.testing.assert_allclose(C, np.eye(20), atol=1e-8)
+
+
+@pytest.fixture(scope="module")
+def blob():
+    g = bumpy_blob(subdivisions=3)  # no symmetry: the identity is the only good self-map
+    return g, laplace_basis(g, k=60, cache=False)
+
+
+def _neighbour_map(g, seed):
+    """Every vertex sent to a random vertex of its 1-ring: a noisy start near the identity."""
+    rng = np.random.default_rng(seed)
+    nbrs = [[] for _ in range(g.n_vertices)]
+    for a, b_, c in g.faces:
+        nbrs[a] += [b_, c]
+        nbrs[b_] += [a, c]
+        nbrs[c] += [a, b_]
+    return np.array([rng.choice(n) for n in nbrs])
+
+
+def test_zoomout_recovers_the_identity_from_a_noisy_start_and_keeps_the_landmarks(blob):
+    g, b = blob
+    start = _neighbour_map(g, 0)
+    assert np.mean(start == np.arange(g.n_vertices)) == 0.0
+    lm = np.array([0, 100, 400])
+    rows = DistanceSolver(g).distances(lm)
+    anchors = Anchors(lm, lm, rows, rows)
+    T = zoomout(b, b, g.vertices, start, anchors, ZoomOutOptions(k_start=10, step=10))
+    assert np.mean(T == np.arange(g.n_vertices)) > 0.95
+    np.testing.assert_array_equal(T[lm], lm)
+    again = zoomout(b, b, g.vertices, start, anchors, ZoomOutOptions(k_start=10, step=10))
+    np.testing.assert_array_equal(T, again)  # deterministic
+
+
+def test_anchors_pull_the_map_to_the_landmarks(blob):
+    g, b = blob
+    # a start far from the identity everywhere: every vertex sent to vertex 0
+    start = np.zeros(g.n_vertices, dtype=np.int64)
+    lm = np.array([0, 150, 300, 450, 600])
+    rows = DistanceSolver(g).distances(lm)
+    plain = zoomout(b, b, g.vertices, start, None, ZoomOutOptions(k_start=10, step=10))
+    anchored = zoomout(b, b, g.vertices, start, Anchors(lm, lm, rows, rows), ZoomOutOptions(k_start=10, step=10))
+    assert np.mean(anchored == np.arange(g.n_vertices)) > np.mean(plain == np.arange(g.n_vertices)) + 0.2
+
+
+def test_a_map_that_does_not_fit_is_an_input_error(blob):
+    g, b = blob
+    with pytest.raises(InputError, match="does not fit"):
+        zoomout(b, b, g.vertices, np.zeros(5, dtype=np.int64))
+    with pytest.raises(InputError, match="k_start"):
+        ZoomOutOptions(k_start=0).levels(50)

@@ -1,0 +1,51 @@
+"""The Laplace–Beltrami basis against the sphere's closed-form spectrum, and its invariances."""
+
+import numpy as np
+import pytest
+
+from shapecond.errors import InputError
+from shapecond.shapes.geometry import make_geometry
+from shapecond.shapes.laplace import laplace_basis
+from shapecond.shapes.synthetic import sphere
+
+
+def test_sphere_spectrum_is_4pi_l_l_plus_1_on_area_one():
+    # a sphere of area 1 has radius R = 1/sqrt(4π): λ = l(l+1)/R² = 4π l(l+1), multiplicity 2l + 1
+    b = laplace_basis(sphere(subdivisions=3), k=16, cache=False)
+    assert abs(b.evals[0]) < 1e-8
+    np.testing.assert_allclose(b.evals[1:4], 8 * np.pi, rtol=0.01)
+    np.testing.assert_allclose(b.evals[4:9], 24 * np.pi, rtol=0.02)
+    np.testing.assert_allclose(b.evals[9:16], 48 * np.pi, rtol=0.03)
+    assert b.mass.sum() == pytest.approx(1.0)
+
+
+def test_eigenvectors_are_mass_orthonormal_and_the_basis_does_not_depend_on_the_unit():
+    g = sphere(subdivisions=2)
+    b = laplace_basis(g, k=12, cache=False)
+    np.testing.assert_allclose(b.evecs.T @ (b.mass[:, None] * b.evecs), np.eye(12), atol=1e-8)
+    big = laplace_basis(make_geometry(g.vertices * 1e4 + 3.0, g.faces), k=12, cache=False)
+    np.testing.assert_allclose(big.evals, b.evals, rtol=1e-6, atol=1e-8)
+    # eigenvalues 1..3 are one eigenspace: compare the projectors, not the vectors
+    for lo, hi in ((0, 1), (1, 4), (4, 9)):
+        P, Q = b.evecs[:, lo:hi], big.evecs[:, lo:hi]
+        np.testing.assert_allclose(P @ P.T, Q @ Q.T, atol=1e-6)
+
+
+def test_the_cache_returns_the_same_basis(tmp_path, monkeypatch):
+    monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path))
+    g = sphere(subdivisions=2)
+    first = laplace_basis(g, k=8)
+    assert list(tmp_path.glob("laplace-*.npz"))
+    second = laplace_basis(g, k=8)
+    np.testing.assert_array_equal(first.evecs, second.evecs)
+
+
+def test_a_point_cloud_gets_a_basis_close_to_its_mesh():
+    g = sphere(subdivisions=3)
+    cloud = laplace_basis(make_geometry(g.vertices, None), k=4, cache=False)
+    np.testing.assert_allclose(cloud.evals[1:4], 8 * np.pi, rtol=0.1)
+
+
+def test_too_few_vertices_is_an_input_error():
+    with pytest.raises(InputError, match="at least 4 vertices"):
+        laplace_basis(make_geometry(np.eye(3), np.array([[0, 1, 2]])), cache=False)
