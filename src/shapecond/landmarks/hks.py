@@ -7,9 +7,10 @@ head, fingers), the classical feature points for landmark-based matching.
 
 Choices (the paper leaves them open):
 
-* operator: on a mesh, the cotan Laplacian and lumped vertex areas of potpourri3d,
-  with areas normalised to total area 1 (times are then scale-free); ``n_eigs = 30``
-  eigenpairs by shift-invert ``eigsh``.  Point clouds and distance matrices have no
+* operator: on a mesh, the first ``n_eigs = 30`` eigenpairs of the shape's one
+  Laplace–Beltrami basis (``shapes.laplace``: robust-laplacian's intrinsic Delaunay
+  cotan Laplacian and lumped areas, total area 1, so times are scale-free; cached, and
+  shared with the dense stage of matching).  Point clouds and distance matrices have no
   mesh: a Gaussian-kernel graph Laplacian on the samples (symmetric normalisation,
   ε = mean distance to the 8th nearest sample) stands in for it.
 * time: ``t = exp(log t_min + time_fraction · (log t_max − log t_min))`` with Sun et
@@ -29,7 +30,6 @@ import math
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import eigsh
 
 from ..errors import InputError
 from .fps import fps_landmarks
@@ -41,17 +41,11 @@ def heat_kernel_signature(evals: np.ndarray, evecs: np.ndarray, t: float) -> np.
     return (evecs**2 * np.exp(-evals * t)).sum(axis=1)
 
 
-def _mesh_spectrum(V, F, n_eigs):
-    import potpourri3d as pp3d
+def _mesh_spectrum(geometry, n_eigs):
+    from ..shapes.laplace import DEFAULT_EIGENPAIRS, laplace_basis
 
-    L = pp3d.cotan_laplacian(V, F).tocsc()
-    area = pp3d.vertex_areas(V, F)
-    if not np.all(area > 0):
-        area = np.maximum(area, 1e-12 * area.max())
-    area = area / area.sum()
-    k = min(n_eigs, V.shape[0] - 2)
-    w, U = eigsh(L, k=k, M=sp.diags(area).tocsc(), sigma=-1e-6, which="LM")
-    return np.clip(w, 0.0, None), U
+    basis = laplace_basis(geometry, max(n_eigs, DEFAULT_EIGENPAIRS))
+    return basis.evals[:n_eigs], basis.evecs[:, :n_eigs]
 
 
 def _graph_spectrum(D, n_eigs, knn=8):
@@ -97,10 +91,12 @@ def hks_landmarks(shape, k: int, time_fraction: float = 0.3, n_eigs: int = 30, s
         raise InputError(f"cannot choose {k} landmarks among {n} samples")
     if not 0.0 <= time_fraction <= 1.0:
         raise InputError("the HKS time fraction must lie in [0, 1]")
+    if not (isinstance(n_eigs, (int, np.integer)) and n_eigs >= 2):
+        raise InputError(f"n_eigs must be an integer >= 2, got {n_eigs!r}")
     g = shape.geometry
     if g is not None and g.faces is not None:
         V, F = np.asarray(g.vertices, float), np.asarray(g.faces)
-        w, U = _mesh_spectrum(V, F, n_eigs)
+        w, U = _mesh_spectrum(g, n_eigs)
         h = heat_kernel_signature(w, U, _time(w, time_fraction))
         nv = V.shape[0]
         i, j = F.ravel(), np.roll(F, 1, axis=1).ravel()
