@@ -18,7 +18,7 @@ from shapecond.errors import InputError
 from shapecond.shapes.io import write_mesh
 from tests.batch.test_batch import VOLATILE, read_table, stable
 from tests.conftest import run_cli
-from tests.matching.test_evaluation import dataset  # noqa: F401 - the class-folder fixture
+from tests.evaluation.test_evaluation import dataset  # noqa: F401 - the class-folder fixture
 
 
 def same_rows(a, b):
