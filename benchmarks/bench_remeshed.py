@@ -2,7 +2,7 @@
 
 Usage:
     python benchmarks/make_remeshed.py ../shared/data/tosca_hires --out DATA     # once (cache folder)
-    python benchmarks/bench_remeshed.py DATA [--jobs 2] [--counts 3,6] [--out DIR] [--no-peer]
+    python benchmarks/bench_remeshed.py DATA [--jobs 2] [--counts 3,6] [--max-targets T] [--out DIR] [--no-peer]
     python benchmarks/bench_remeshed.py DATA --from DIR                          # summarise a run
 
 1. ``shapecond.evaluate`` (the remeshed protocol, chosen by the ``corres/``
@@ -44,7 +44,7 @@ def evaluate_code(dataset: Path, out: Path, a) -> str:
     return (f"import shapecond as sc\nfrom shapecond.evaluation.report import write_report\n"
             f"ev = sc.evaluate({str(dataset)!r}, classes={classes!r}, methods={tuple(a.methods.split(','))!r}, "
             f"matchers={tuple(a.matchers.split(','))!r}, counts={tuple(int(c) for c in a.counts.split(','))!r}, "
-            f"n_jobs={a.jobs}, n_points={a.points}, force=True)\nwrite_report(ev, {str(out)!r})\n")
+            f"n_jobs={a.jobs}, n_points={a.points}, max_targets={a.max_targets!r}, force=True)\nwrite_report(ev, {str(out)!r})\n")
 
 
 def peer_task(cls_dir: str, target: str, sets: dict, counts: list) -> list:
@@ -198,6 +198,7 @@ def main(argv=None) -> None:
     ap.add_argument("--counts", default="3,6")
     ap.add_argument("--points", type=int, default=400)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--max-targets", type=int, default=None, help="at most this many targets per class")
     ap.add_argument("--out", type=Path, default=OUT / "remeshed")
     ap.add_argument("--from", dest="from_dir", type=Path, default=None)
     ap.add_argument("--no-peer", action="store_true")
