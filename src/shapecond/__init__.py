@@ -5,11 +5,12 @@ Non-Rigid Shape Matching*, SGP 2011.  Data flows one way::
 
     input -> metric shape -> scores -> landmarks -> matching -> evaluation
 
-The Python interface is ``import shapecond as sc``: ``sc.load``,
+This package is the front door (``shapecond.api``): ``sc.load``, ``sc.info``,
 ``sc.metric_shape``, ``sc.score``, ``sc.local_score``, ``sc.landmarks``,
-``sc.heatmap``, ``sc.match``, ``sc.evaluate`` and ``sc.SymmetryProblem``
-(``shapecond.api``).  ``sc.landmarks`` is the function; the subpackage of the
-landmark methods is imported as ``from shapecond.landmarks import ...``.
+``sc.heatmap``, ``sc.kappa``, ``sc.match``, ``sc.SymmetryProblem``, their result
+types, and ``sc.evaluate`` (the paper's evaluation, ``shapecond.evaluation``).
+``sc.landmarks`` is the function; the landmark methods themselves are imported
+from the subpackage as ``from shapecond.landmarks import ...``.
 """
 
 from ._jit_cache import ensure_writable_cache
@@ -17,18 +18,13 @@ from ._jit_cache import ensure_writable_cache
 ensure_writable_cache()
 del ensure_writable_cache
 
-from importlib.metadata import PackageNotFoundError, version as _version  # noqa: E402
+from ._version import __version__  # noqa: E402
+from .api import (HeatMapResult, KappaResult, LandmarkResult, LocalResult, MatchResult, ScoreResult,  # noqa: E402
+                  SymmetryProblem, heatmap, info, kappa, landmarks, load, local_score, match, metric_shape, score)
+from .errors import InputError, OutputError, ShapecondError, TooLargeError  # noqa: E402
+from .evaluation import evaluate  # noqa: E402
 
-try:
-    __version__ = _version("shapecond")
-except PackageNotFoundError:  # pragma: no cover - a source tree that was never installed
-    __version__ = "0+unknown"
-
-from . import landmarks as _landmark_methods  # noqa: E402,F401  (loaded first: the name below is the function)
-from .api import (HeatMapResult, MatchResult, SymmetryProblem, evaluate, heatmap,  # noqa: E402
-                  landmarks, load, local_score, match, metric_shape, score)
-from .errors import InputError, OutputError, TooLargeError  # noqa: E402
-
-__all__ = ["HeatMapResult", "InputError", "MatchResult", "OutputError", "SymmetryProblem", "TooLargeError",
-           "__version__", "evaluate", "heatmap", "landmarks", "load", "local_score", "match", "metric_shape",
+__all__ = ["HeatMapResult", "InputError", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult",
+           "OutputError", "ScoreResult", "ShapecondError", "SymmetryProblem", "TooLargeError", "__version__",
+           "evaluate", "heatmap", "info", "kappa", "landmarks", "load", "local_score", "match", "metric_shape",
            "score"]

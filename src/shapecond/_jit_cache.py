@@ -34,7 +34,7 @@ def ensure_writable_cache() -> None:
     """Set ``NUMBA_CACHE_DIR`` when numba could not cache next to the package's sources."""
     if os.environ.get("NUMBA_CACHE_DIR") or _writable(Path(__file__).parent / "shapes" / "__pycache__"):
         return
-    from .shapes.metric import cache_dir
+    from .cache import cache_dir
 
     uid = os.getuid() if hasattr(os, "getuid") else os.getpid()
     folders = [Path(tempfile.gettempdir()) / f"shapecond-numba-{uid}"]

@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 
 from .checks import open_regular
-from .errors import InputError
+from .errors import InputError, OutputError
 from .output import atomic_open
 
 #: Bumped when the layout of every entry changes (old entries are then ignored).
@@ -255,7 +255,7 @@ def _store(path: Path, data: bytes) -> None:
     try:
         with atomic_open(path, "wb") as fh:
             fh.write(data)
-    except InputError as exc:
+    except (InputError, OutputError) as exc:
         _warn(f"cache not written ({exc}); the result will be recomputed next time")
 
 

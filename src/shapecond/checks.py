@@ -129,6 +129,13 @@ def check_choice(value, name: str, choices) -> str:
     return value
 
 
+def check_flag(value, name: str) -> bool:
+    """``value`` if it is a bool (NumPy's included); ``InputError`` otherwise: ``"yes"`` or 1 is not a flag."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise InputError(f"{name} must be True or False, got {_fmt(value)}")
+
+
 # --- vertex ids --------------------------------------------------------------------
 
 def check_ids(values, name: str = "landmarks") -> list[int]:

@@ -1,10 +1,12 @@
 """Error types shared by the library and the command line.
 
-``InputError`` is raised for anything wrong with what the user gave us (a
-broken mesh, landmarks out of range, a non-square distance matrix, an option
-out of range...).  The command line turns it into one ``error: ...`` line on
-stderr and exit status 2.  Any other exception is an internal failure (exit
-status 1).
+``InputError`` (a ``ValueError``) is raised for anything wrong with what the
+user gave us (a broken mesh, landmarks out of range, a non-square distance
+matrix, an option out of range...); ``OutputError`` (an ``OSError``) for a
+result that cannot be written (a full disk, a read-only folder, a link or FIFO
+where a file should go).  Both derive from ``ShapecondError``; the command line
+turns either into one ``error: ...`` line on stderr and exit status 2.  Any
+other exception is an internal failure (exit status 1).
 """
 
 
@@ -24,5 +26,5 @@ class TooLargeError(InputError):
     """
 
 
-class OutputError(InputError):
+class OutputError(ShapecondError, OSError):
     """An output file cannot be written (full disk, no permission, a folder in the way)."""

@@ -1,4 +1,5 @@
-"""Results as plain JSON values: the one converter behind ``--json`` and every ``to_dict``.
+"""Results as plain JSON values: the one converter behind ``--json`` and every ``to_dict``;
+and ``fmt``, the one way a number is printed for people (text output, titles, reports).
 
 ``inf`` becomes the string ``"inf"`` (``"-inf"``), NaN and None become ``null``,
 numpy scalars and arrays become Python numbers and lists, dataclasses and
@@ -56,3 +57,17 @@ def jsonable(obj):
 def dumps(obj, **kw) -> str:
     """``json.dumps`` of :func:`jsonable` (``obj``), refusing NaN."""
     return json.dumps(jsonable(obj), allow_nan=False, **kw)
+
+
+def fmt(value, digits: int = 4) -> str:
+    """A number for people: ``digits`` significant digits, ``inf`` / ``-inf``, ``-`` for None or NaN."""
+    if value is None:
+        return "-"
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        if math.isnan(v):
+            return "-"
+        if math.isinf(v):
+            return "inf" if v > 0 else "-inf"
+        return f"{v:.{digits}g}"
+    return str(value)

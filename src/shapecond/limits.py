@@ -45,8 +45,12 @@ def human_bytes(b: float) -> str:
     return f"{b / 2**30:.1f} GB" if b >= 2**30 else f"{b / 2**20:.0f} MB"
 
 
+#: How a refusal says to force the work: the Python parameter and the command-line flag.
+FORCE_HINT = "pass force=True (--force on the command line)"
+
+
 def check_cost(what: str, seconds: float = 0.0, nbytes: float = 0.0, force: bool = False,
-               hint: str = "use --force") -> None:
+               hint: str = FORCE_HINT) -> None:
     """Refuse (``TooLargeError``) or warn (``CostWarning``) according to the estimates."""
     if not force and nbytes > MAX_BYTES:
         raise TooLargeError(f"{what} needs about {human_bytes(nbytes)} of memory, more than the "
@@ -93,57 +97,5 @@ def search_seconds(n_samples: int, n_targets: int | None = None, searches: float
     return searches * SEARCH_SECONDS_400 * (n_samples / 400.0) ** 2 * (m / 3200.0)
 
 
-def one_blas_thread():
-    """Context manager limiting BLAS to one thread (threadpoolctl).
-
-    The small dense products of the searches and of ARPACK lose time to BLAS
-    threads, and thrash when the cores are shared (20x measured with ARPACK).
-    """
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=1, user_api="blas")
-
-
-def single_blas_thread(f):
-    """Decorator: run ``f`` with BLAS limited to one thread (``one_blas_thread``).
-
-    Besides speed, this makes results independent of the thread count: a
-    threaded matrix product sums in another order, and the greedy choices of
-    CNBS follow near-ties of such sums (TOSCA wolf0, N = 400: the second CNBS
-    landmark was sample 171 with one BLAS thread and 304 with two).
-    """
-    import functools
-
-    @functools.wraps(f)
-    def wrapped(*args, **kwargs):
-        with one_blas_thread():
-            return f(*args, **kwargs)
-
-    return wrapped
-
-
-def die_with_parent(parent_pid: int) -> None:
-    """Make this worker process end when its parent does (Linux ``PR_SET_PDEATHSIG``).
-
-    Called at the start of every task run by a pool of worker processes, so that
-    killing the command (even with SIGKILL) does not leave its workers running.
-    A no-op where ``prctl`` is not available.
-    """
-    import ctypes
-    import os
-    import signal
-
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
-    except (OSError, AttributeError):  # pragma: no cover - not Linux
-        return
-    if os.getppid() != parent_pid:  # the parent died before the signal was armed
-        os._exit(1)
-
-
-def cap_jobs(n_jobs: int, n_tasks: int) -> int:
-    """At most one worker per task and per core (``os.cpu_count``), at least one."""
-    import os
-
-    return max(1, min(int(n_jobs), int(n_tasks), os.cpu_count() or 1))
+# BLAS-thread control lives in ``threads``; these names stay importable from here.
+from .threads import one_blas_thread, single_blas_thread  # noqa: E402,F401

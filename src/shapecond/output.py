@@ -236,6 +236,8 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
             raise OutputError(f"{path}: the folder {folder} does not exist")
         _remove_stale_temps(folder, path.name)
         fd, tmp = _open_temp(folder, path.name)
+    except OutputError:
+        raise
     except OSError as exc:
         raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
     fh = os.fdopen(fd, "wb", closefd=False)
@@ -246,6 +248,8 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
             handle.flush()
             fh.flush()
             _publish(fd, tmp, path)
+        except OutputError:
+            raise
         except OSError as exc:
             raise OutputError(f"{path}: cannot write ({_reason(exc)})") from None
     except BaseException:

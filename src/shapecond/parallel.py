@@ -40,7 +40,7 @@ import uuid
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, wait
 
-from shapecond import __version__
+from shapecond._version import __version__
 from shapecond.errors import InputError
 
 #: Seconds to wait for a Dask scheduler to answer before giving up.
@@ -97,9 +97,9 @@ def _client(kind, value):
 
 
 def _worker_version():
-    import shapecond
+    from shapecond._version import __version__ as on_worker  # imported on the worker: its own install
 
-    return shapecond.__version__
+    return on_worker
 
 
 def check_workers(client) -> int:
@@ -205,7 +205,6 @@ def _thread_env(n_jobs: int) -> dict:
 
 def _in_worker(parent_pid, f, args, kwargs):
     """Run one task in a pool worker that ends with the command, even on SIGKILL."""
-    from shapecond.limits import die_with_parent
 
     die_with_parent(parent_pid)
     return f(*args, **kwargs)
@@ -213,11 +212,10 @@ def _in_worker(parent_pid, f, args, kwargs):
 
 def _iter_loky(tasks, n_jobs):
     """Tasks on joblib's loky pool, at most ``n_jobs`` in flight (no more workers than tasks
-    and cores: ``limits.cap_jobs``); suspects of a crash retried alone."""
+    and cores: ``cap_jobs``); suspects of a crash retried alone."""
     from joblib.externals.loky import get_reusable_executor
     from joblib.externals.loky.process_executor import BrokenProcessPool
 
-    from shapecond.limits import cap_jobs
 
     n_jobs = cap_jobs(n_jobs, len(tasks))
     queue, suspects, running = deque(range(len(tasks))), deque(), {}
@@ -335,3 +333,30 @@ def _vm_hwm_mib() -> float:
     except OSError:
         pass
     return math.nan
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Make this worker process end when its parent does (Linux ``PR_SET_PDEATHSIG``).
+
+    Called at the start of every task run by a pool of worker processes, so that
+    killing the command (even with SIGKILL) does not leave its workers running.
+    A no-op where ``prctl`` is not available.
+    """
+    import ctypes
+    import os
+    import signal
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):  # pragma: no cover - not Linux
+        return
+    if os.getppid() != parent_pid:  # the parent died before the signal was armed
+        os._exit(1)
+
+
+def cap_jobs(n_jobs: int, n_tasks: int) -> int:
+    """At most one worker per task and per core (``os.cpu_count``), at least one."""
+    import os
+
+    return max(1, min(int(n_jobs), int(n_tasks), os.cpu_count() or 1))

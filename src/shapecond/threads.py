@@ -12,6 +12,11 @@ uses as many threads as numba may (``numba.get_num_threads()``: the cores of thi
 process, or its share when it is one of several workers of ``parallel``, which sets
 ``NUMBA_NUM_THREADS``).  A ``thread_map`` called from inside one of its own tasks runs
 serially, so nested parallel code never oversubscribes the cores.
+
+``one_blas_thread`` / ``single_blas_thread`` limit BLAS to one thread around the
+small dense products of the searches and of ARPACK (threads only lose time
+there, and a threaded product sums in another order, which greedy choices can
+follow).
 """
 
 from __future__ import annotations
@@ -55,3 +60,32 @@ def thread_map(f, items) -> list:
     if k <= 1:
         return [f(x) for x in items]
     return list(_pool(k).map(lambda x: _inside(f, x), items))
+
+
+def one_blas_thread():
+    """Context manager limiting BLAS to one thread (threadpoolctl).
+
+    The small dense products of the searches and of ARPACK lose time to BLAS
+    threads, and thrash when the cores are shared (20x measured with ARPACK).
+    """
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def single_blas_thread(f):
+    """Decorator: run ``f`` with BLAS limited to one thread (``one_blas_thread``).
+
+    Besides speed, this makes results independent of the thread count: a
+    threaded matrix product sums in another order, and the greedy choices of
+    CNBS follow near-ties of such sums (TOSCA wolf0, N = 400: the second CNBS
+    landmark was sample 171 with one BLAS thread and 304 with two).
+    """
+    import functools
+
+    @functools.wraps(f)
+    def wrapped(*args, **kwargs):
+        with one_blas_thread():
+            return f(*args, **kwargs)
+
+    return wrapped

@@ -72,7 +72,7 @@ def test_dense_maps_between_differently_meshed_strips_err_below_a_vertex_spacing
 
 def test_reference_errors_of_the_truth_and_of_its_mirror_image():
     from shapecond.evaluation.protocols import reference_errors
-    from shapecond.shapes.geometry import make_geometry
+    from shapecond.shapes.validate import make_geometry
 
     V, F, uv = _strip(15)
     g = make_geometry(V, F)
@@ -88,7 +88,7 @@ def test_reference_errors_of_the_truth_and_of_its_mirror_image():
 
 
 def test_landmarks_off_every_reference_point_go_through_the_nearest_one():
-    from shapecond.shapes.geometry import make_geometry
+    from shapecond.shapes.validate import make_geometry
 
     V, F, uv = _strip(11)
     g = make_geometry(V, F)

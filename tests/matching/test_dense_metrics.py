@@ -7,7 +7,7 @@ from shapecond.errors import InputError
 from shapecond.matching.metrics import cumulative_curve, errors_from_rows, normalise, summary
 from shapecond.matching.pipeline import MatchOptions, match_shapes
 from shapecond.matching.sampled import insert_landmarks, sample_surface
-from shapecond.shapes.geometry import make_geometry
+from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.synthetic import plane_patch
 
 W, H = 1.0, 0.55  # a rectangle: 3 non-collinear landmarks remove its symmetries

@@ -6,7 +6,7 @@ import pytest
 from shapecond.errors import InputError
 from shapecond.shapes import synthetic
 from shapecond.shapes.geodesics import DistanceSolver
-from shapecond.shapes.geometry import make_geometry
+from shapecond.shapes.validate import make_geometry
 
 
 def _great_circle_error(backend, subdivisions):

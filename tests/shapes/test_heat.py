@@ -6,7 +6,7 @@ import pytest
 
 from shapecond.shapes import heat, synthetic
 from shapecond.shapes.geodesics import DistanceSolver
-from shapecond.shapes.geometry import make_geometry
+from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.intrinsic import DELAUNAY_EPS, intrinsic_delaunay_cover, tufted_cover
 from shapecond.shapes.sampling import farthest_point_sampling
 

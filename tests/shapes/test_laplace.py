@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from shapecond.errors import InputError
-from shapecond.shapes.geometry import make_geometry
+from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.laplace import laplace_basis
 from shapecond.shapes.synthetic import sphere
 

@@ -5,7 +5,8 @@ import pytest
 
 from shapecond.errors import InputError
 from shapecond.shapes import synthetic
-from shapecond.shapes.geometry import Geometry, make_geometry
+from shapecond.shapes.geometry import Geometry
+from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.metric import from_distance_matrix, metric_shape, restrict_targets
 
 

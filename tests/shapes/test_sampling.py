@@ -7,7 +7,7 @@ from hypothesis import given, settings, strategies as st
 from shapecond.errors import InputError
 from shapecond.shapes import synthetic
 from shapecond.shapes.geodesics import DistanceSolver
-from shapecond.shapes.geometry import make_geometry
+from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.sampling import farthest_point_sampling
 
 

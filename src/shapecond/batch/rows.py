@@ -1,9 +1,9 @@
 """One shape, one row: the per-shape task of batch scoring (runs on a worker).
 
-``score_shape`` fills the columns of ``schema.COLUMNS`` through the code paths
-of the single-shape commands, so that a row holds what ``shapecond info``,
-``score --json``, ``local --json`` and ``landmarks --json`` print for that shape
-with the same options.  It never raises for a bad shape: the row's ``error``
+``shape_row`` fills the columns of ``schema.COLUMNS`` through the Python
+interface (``shapecond.api``) that the single-shape commands call, so that a row
+holds what ``shapecond info``, ``score --json``, ``local --json`` and
+``landmarks --json`` print for that shape with the same options.  It never raises for a bad shape: the row's ``error``
 column gets the one-line message, and the columns computed before the failure
 are kept.
 """
@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import __version__
-from ..errors import InputError
+from .._version import __version__
+from ..errors import InputError, ShapecondError
 from ..parallel import PeakMemory, worker_name
 from . import schema
 from .inputs import content_hash
@@ -98,7 +98,7 @@ def params_key(options: dict) -> str:
     return json.dumps(key, sort_keys=True, separators=(",", ":"))
 
 
-def score_shape(spec: str, expected_hash: str | None, options: dict, params: str) -> dict:
+def shape_row(spec: str, expected_hash: str | None, options: dict, params: str) -> dict:
     """The row of one shape (see ``schema.COLUMNS``); failures go to its ``error`` column."""
     row = schema.empty_row()
     row.update(file=spec, content_hash=expected_hash, params=params, version=__version__, worker=worker_name())
@@ -107,7 +107,7 @@ def score_shape(spec: str, expected_hash: str | None, options: dict, params: str
         try:
             _check_file(spec, expected_hash)
             _fill(row, spec, options)
-        except InputError as exc:
+        except ShapecondError as exc:
             row["error"] = _one_line(exc) or "bad input"
         except MemoryError:
             row["error"] = "out of memory; try fewer --points"
@@ -139,43 +139,42 @@ def _check_file(spec: str, expected_hash: str | None) -> None:
 
 
 def _fill(row: dict, spec: str, options: dict) -> None:
-    from ..cli.common import build_shape, load_geometry_or_matrix
-    from ..shapes.io import describe_input
+    from .. import api
 
     what = parse_what(options.get("what") or ["score"])
     force = bool(options.get("force", False))
-    info = describe_input(spec, force)
+    info = api.info(spec)
     row.update(kind=info["kind"], vertices=info["n_vertices"], faces=info["n_faces"],
                components=info["components"], problems="; ".join(info["problems"]) or None)
-    loaded = load_geometry_or_matrix(spec, options.get("largest_component", False), options.get("symmetry_map"),
-                                     force)
-    seed, effort = options.get("seed", 0), options.get("effort", "default")
+    kw = dict(metric=options.get("metric") or "geodesic", backend=options.get("geodesic_backend") or "heat",
+              seed=options.get("seed", 0), target=options.get("target"), target_factor=options.get("target_factor") or 8,
+              cache=not options.get("no_cache", False), force=force,
+              largest_component=bool(options.get("largest_component", False)), symmetry_map=options.get("symmetry_map"))
+    effort = options.get("effort", "default")
+    loaded = api.load(spec, largest_component=kw["largest_component"], symmetry_map=kw["symmetry_map"], force=force)
     shape = None
     if what.score or what.landmarks:
-        shape_kw = {k: options.get(k) for k in ("points", "metric", "geodesic_backend", "seed", "largest_component",
-                                                "no_cache", "target", "target_factor", "symmetry_map", "force")
-                    if options.get(k) is not None}
-        shape = build_shape(spec, loaded=loaded, progress=False, **shape_kw)
+        shape = api.metric_shape(loaded, options.get("points"), **kw)
         row.update(n_points=shape.n_points, n_targets=shape.n_targets, covering_radius=shape.covering_radius)
     if what.score:
-        _score_columns(row, shape, seed, effort)
+        _score_columns(row, api.score(shape, effort=effort, **kw))
     if what.local:
-        _local_columns(row, loaded)
+        if isinstance(loaded, np.ndarray):
+            raise InputError("a distance matrix has no surface to deform: the local score needs a triangle mesh")
+        res = api.local_score(loaded, force=force)
+        row.update(local_score=res.score, local_lambda_min=res.lambda_min,
+                   local_zero_modes="; ".join(res.zero_modes) or None)
     if what.landmarks:
-        from ..landmarks import select_landmarks
-
         k, method = what.landmarks
-        res = select_landmarks(shape, k, method, seed=seed, scores=True, effort=effort)
+        res = api.landmarks(shape, k, method, scores=True, effort=effort, **kw)
         row.update(landmark_method=method, landmarks=[int(v) for v in res.landmarks],
                    landmark_scores=[math.nan if s is None else float(s) for s in res.scores])
 
 
-def _score_columns(row: dict, shape, seed: int, effort: str) -> None:
+def _score_columns(row: dict, result) -> None:
     """The global score's columns, from the report ``shapecond score --json`` prints."""
     from ..symmetry import objective
-    from ..symmetry.report import score_shape as score_metric_shape
 
-    result = score_metric_shape(shape, (), seed=seed, effort=effort)
     report, sc = result.to_dict(), result.score
     n = sc.n_points
     moved = np.asarray(sc.witness) != np.arange(n)
@@ -183,7 +182,7 @@ def _score_columns(row: dict, shape, seed: int, effort: str) -> None:
                swap_floor=float(sc.swap_floor),
                resolution=None if report["resolution"] is None else report["resolution"]["flag"],
                witness_moved=float(moved.mean()),
-               witness_displacement=math.sqrt(objective.d2(shape.D, sc.witness) / n))
+               witness_displacement=math.sqrt(objective.d2(result.shape.D, sc.witness) / n))
     row.update(scale_aware_values(report))
 
 
@@ -193,13 +192,3 @@ def scale_aware_values(report: dict) -> dict:
     if d is None:
         return {}
     return {"delta": d["displacement"], "delta_epsilon": d["epsilon"], "delta_moved": d["moved"]}
-
-
-def _local_columns(row: dict, loaded) -> None:
-    from ..deformation import local_score_of_geometry
-
-    if isinstance(loaded, np.ndarray):
-        raise InputError("a distance matrix has no surface to deform: the local score needs a triangle mesh")
-    res = local_score_of_geometry(loaded)
-    row.update(local_score=res.score, local_lambda_min=res.lambda_min,
-               local_zero_modes="; ".join(res.zero_modes) or None)

@@ -3,7 +3,7 @@
 ``run_batch`` expands the inputs (``inputs.expand_inputs``), hashes them, opens
 the output table (one writer at a time; ``table.Table``), drops the shapes
 whose (file, content hash, parameters) already have a row when resuming, runs
-one ``rows.score_shape`` task per remaining shape through ``parallel.runner``
+one ``rows.shape_row`` task per remaining shape through ``parallel.runner``
 (this process, local processes or a Dask cluster), and appends each row as it
 arrives.  A shape that fails, or whose worker dies, becomes an error row; the
 batch goes on.
@@ -17,11 +17,11 @@ import statistics
 import time
 from dataclasses import dataclass, field
 
-from .. import __version__
+from .._version import __version__
 from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
-from .rows import params_key, score_shape, with_defaults
+from .rows import params_key, shape_row, with_defaults
 from .table import Table, table_format
 
 #: How many of the most symmetric shapes and of the failures the summary lists.
@@ -112,7 +112,7 @@ def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=No
 def _score(table, todo, options, n_jobs, scheduler, progress) -> str:
     from tqdm import tqdm
 
-    tasks = [(score_shape, (spec, digest, options, params), {}) for spec, digest, params in todo]
+    tasks = [(shape_row, (spec, digest, options, params), {}) for spec, digest, params in todo]
     failed = 0
     with runner(n_jobs, scheduler) as run, \
             tqdm(total=len(tasks), desc="scoring", unit="shape", disable=not progress) as bar:

@@ -4,7 +4,7 @@ Every output format holds the same columns in the same order (Parquet types
 below; CSV and JSON Lines write lists as JSON arrays, a missing value as an
 empty cell / ``null``, and an infinite score as ``inf`` / ``"inf"``).  Values
 come from the code paths of the single-shape commands: ``info``
-(``shapes.io.describe_input``), ``score`` (``symmetry.report.score_shape``),
+(``shapes.io.describe_input``), ``score`` (``shapecond.api.score``),
 ``local`` (``deformation.local_score_of_geometry``) and ``landmarks``
 (``landmarks.select_landmarks``).  A row is identified by its file, the file's
 content hash and the parameters (``KEY``): ``--resume`` skips a shape whose

@@ -337,7 +337,7 @@ class Table:
             lines, tail = self.lines.read()
             parse = _csv_rows if self.format == "csv" else _json_rows
             more = parse(lines, tail, self.lines.path, strict)
-        except InputError:
+        except (InputError, OutputError):
             raise
         except Exception as exc:  # noqa: BLE001 - any reader failure means "not our table"
             raise InputError(f"{self.path}: not a readable batch table ({exc.__class__.__name__}); "

@@ -17,8 +17,8 @@ import warnings
 
 import click
 
-from .. import __version__
-from ..errors import InputError
+from .._version import __version__
+from ..errors import ShapecondError
 
 
 class _LazyGroup(click.Group):
@@ -76,7 +76,7 @@ def main(argv=None) -> None:
         sys.exit(exc.exit_code)
     except click.Abort:
         _fail("aborted", 130)
-    except InputError as exc:
+    except ShapecondError as exc:  # bad input, or an output that cannot be written
         _fail(str(exc).splitlines()[0] if str(exc) else "bad input", 2)
     except MemoryError:
         _fail("out of memory; try fewer --points", 1)

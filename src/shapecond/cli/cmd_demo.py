@@ -20,10 +20,8 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..api import landmarks, load, metric_shape, score
 from ..errors import InputError
-from ..shapes.metric import metric_shape
-from ..shapes.synthetic import generate
-from ..symmetry.verdict import verdict
 from .common import SEED, Float, Int, emit_json, fmt, force_option, info, json_option, progress_enabled
 
 
@@ -62,22 +60,20 @@ def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
 @json_option
 def command(points, landmark_points, delta, out, seed, force, as_json):
     """Score the generated animal, show its witness map, and pick three CNBS landmarks."""
-    from ..landmarks import select_landmarks
-    from ..symmetry.score import symmetry_score
-
     if not landmark_points <= points:
         raise InputError("--landmark-points must lie between 3 and --points")
     t0 = time.perf_counter()
     out = Path(out)
-    geometry = generate("animal", delta=delta)
-    shape = metric_shape(geometry, n_points=points, seed=seed, progress=progress_enabled(), force=force)
-    score = symmetry_score(shape.D, seed=seed, force=force)
+    geometry = load(f"demo:animal:delta={delta}")
+    shape = metric_shape(geometry, points, seed=seed, target="samples", progress=progress_enabled(), force=force)
+    result = score(shape, seed=seed, force=force)
+    sc = result.score
     inverse = {int(v): k for k, v in enumerate(shape.samples)}
     mirror = np.array([inverse.get(int(geometry.symmetry[v]), -1) for v in shape.samples])
-    small = metric_shape(geometry, n_points=landmark_points, seed=seed)
-    chosen = select_landmarks(small, 3, "cnbs", seed=seed, keep_heat_maps=True)
+    small = metric_shape(geometry, landmark_points, seed=seed, target="samples")
+    chosen = landmarks(small, 3, "cnbs", seed=seed, keep_heat_maps=True)
     heat = chosen.heat_maps[0]  # sigma with each sample fixed, before any landmark
-    pictures = _pictures(out, shape, score, small, heat, chosen)
+    pictures = _pictures(out, shape, sc, small, heat, chosen)
     summary = {
         "shape": f"demo:animal:delta={delta}",
         "n_vertices": geometry.n_vertices,
@@ -86,11 +82,12 @@ def command(points, landmark_points, delta, out, seed, force, as_json):
         "backend": shape.backend,
         "diameter": shape.scale,
         "covering_radius": shape.covering_radius,
-        "sigma": score.to_dict()["sigma"],
-        "sigma_hat": score.to_dict()["sigma_hat"],
-        "kappa": score.to_dict()["kappa"],
-        "witness_is_mirror_map": bool(np.array_equal(score.witness, mirror)),
-        "verdict": verdict(score, shape.D, None, shape.covering_radius),
+        "sigma": sc.to_dict()["sigma"],
+        "sigma_hat": sc.to_dict()["sigma_hat"],
+        "kappa": sc.to_dict()["kappa"],
+        "witness_is_mirror_map": bool(np.array_equal(sc.witness, mirror)),
+        "delta": result.scale.displacement,
+        "verdict": result.verdict,
         "landmark_points": small.n_points,
         "landmarks": [int(v) for v in chosen.landmarks],
         "scores": list(chosen.scores),
@@ -108,7 +105,7 @@ def command(points, landmark_points, delta, out, seed, force, as_json):
     click.echo(f"sigma        [{fmt(sig['lower'])}, {fmt(sig['upper'])}]   kappa in "
                f"[{fmt(summary['kappa']['lower'])}, {fmt(summary['kappa']['upper'])}]")
     what = "the mirror map" if summary["witness_is_mirror_map"] else "a non-mirror map"
-    ambiguity = "an exact symmetry: matching cannot tell left from right" if math.isinf(score.sigma_lower) else \
+    ambiguity = "an exact symmetry: matching cannot tell left from right" if math.isinf(sc.sigma_lower) else \
         "a near-isometry that makes matching ambiguous"
     click.echo(f"witness      {what}: {ambiguity}")
     click.echo(f"verdict      {summary['verdict']}")

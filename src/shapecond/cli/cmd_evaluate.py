@@ -21,7 +21,7 @@ from pathlib import Path
 import click
 
 from ..errors import InputError
-from ..api import evaluate
+from ..evaluation import evaluate
 from ..evaluation.report import by_protocol, correlations, protocols, write_report
 from ..evaluation.run import DEFAULT_METHODS, PROTOCOL_CHOICES
 from ..matching.pipeline import DENSE_STAGES, MATCHERS

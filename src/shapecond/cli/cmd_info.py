@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ..shapes.io import describe_input
+from ..api import info as describe
 from .common import emit_json, json_option
 
 
@@ -13,7 +13,7 @@ from .common import emit_json, json_option
 @json_option
 def command(input_spec, as_json):
     """Counts, bounding box, components, boundary edges, isolated vertices, problems."""
-    report = describe_input(input_spec)
+    report = describe(input_spec)
     if as_json:
         emit_json(report)
         return

@@ -10,13 +10,9 @@ from __future__ import annotations
 
 import click
 
-from ..errors import InputError
-from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
-from .common import (IDS_HELP, Float, Int, build_shape, emit_json, fmt, info, json_option, parse_ids, pop_shape_options,
-                     progress_enabled, shape_options)
-
-#: Samples taken from a mesh when --points is not given.
-DEFAULT_KAPPA_POINTS = 8
+from ..api import kappa
+from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
+                     pop_shape_options, shape_options)
 
 
 @click.command("kappa")
@@ -35,55 +31,14 @@ def command(input_spec, landmarks, trials, scale, time_limit, as_json, **kwargs)
 
     For meshes N defaults to 8 samples; at most 9 samples may be free of landmarks.
     """
-    shape_kw = pop_shape_options(kwargs)
-    if shape_kw.get("target") == "dense":
-        raise InputError("kappa probes match samples to samples; --target dense does not apply")
-    shape_kw["target"] = "samples"
-    ids = parse_ids(landmarks)
-    points = shape_kw.get("points")
-    limit = MAX_PROBE_POINTS + len(ids)
-    if points is not None and points > limit:
-        raise InputError(f"kappa probes enumerate every map: at most {limit} points with "
-                         f"{len(ids)} landmarks, got --points {points}")
-    is_matrix = input_spec.endswith(".npy")
-    if points is None and not is_matrix:
-        shape_kw["points"] = min(DEFAULT_KAPPA_POINTS + len(ids), limit)
-    shape = build_shape(input_spec, landmarks=ids, **shape_kw)
-    if shape.n_points > limit:
-        raise InputError(f"kappa probes enumerate every map: at most {limit} points with "
-                         f"{len(ids)} landmarks, the input has {shape.n_points}")
-    L = list(range(len(ids)))  # build_shape puts the landmarks first
-    bar = None
-    if progress_enabled():
-        from tqdm import tqdm
-
-        bar = tqdm(total=trials, desc="probes", unit="probe", leave=False)
-    try:
-        res = kappa_probes(shape.D, trials=trials, seed=shape_kw.get("seed", 0), landmarks=L, scale=scale,
-                           time_limit=time_limit, force=shape_kw.get("force", False),
-                           progress=None if bar is None else lambda done, total: bar.update(1))
-    finally:
-        if bar is not None:
-            bar.close()
-    lo, hi = res.kappa
-    out = {
-        "n_points": shape.n_points,
-        "landmarks": ids,
-        "samples": shape.sample_ids,
-        "trials": trials,
-        "probes": list(res.ratios),
-        "probe_kinds": list(res.kinds),
-        "kappa_probe_max": res.kappa_probe_max,
-        "sigma": res.sigma,
-        "witness": res.witness,
-        "kappa": {"lower": lo, "upper": hi},
-        "notes": list(res.notes),
-        "seconds": res.seconds,
-    }
+    n_points, options = api_options(pop_shape_options(kwargs))
+    res = kappa(input_spec, n_points, landmarks=parse_ids(landmarks), trials=trials, scale=scale,
+                time_limit=time_limit, **options)
     if as_json:
-        emit_json(out)
+        emit_json(res.to_dict())
         return
-    click.echo(f"points             {shape.n_points} ({len(ids)} landmarks)")
+    lo, hi = res.kappa
+    click.echo(f"points             {res.shape.n_points} ({len(res.landmark_ids)} landmarks)")
     click.echo(f"sigma (exact)      {fmt(res.sigma)}")
     click.echo(f"kappa bracket      [{fmt(lo)}, {fmt(hi)}]   (Theorem 4.1: sigma <= kappa <= 2 sigma + 1)")
     click.echo(f"probes             {len(res.ratios)}, max {fmt(res.kappa_probe_max)}")

@@ -4,36 +4,10 @@ from __future__ import annotations
 
 import click
 
-from ..landmarks import METHODS, SCORES, select_landmarks
-from ..limits import check_cost, search_seconds
-from .common import (IDS_HELP, Float, Int, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix,
-                     parse_ids, pop_shape_options, progress_enabled, shape_options)
-
-
-def guess_up(shape, up):
-    """Vertical axis for pictures: --up, else ``viz.render.guess_up`` (animal y, TOSCA z)."""
-    from ..viz.render import guess_up as guess
-
-    return up or guess(shape.geometry)
-
-
-def draw_landmarks(shape, result, png, ply, up, title):
-    """Landmark pictures (Figure 6 colours) as PNG and/or PLY; matrices are drawn by MDS."""
-    from ..viz.ply import write_ply
-    from ..viz.render import render_png
-    from ..symmetry.starts import classical_mds
-
-    if shape.geometry is not None:
-        V, F, verts = shape.geometry.vertices, shape.geometry.faces, list(result.vertices)
-    else:
-        V, F, verts = classical_mds(shape.D), None, list(result.sample_indices)
-    if png:
-        render_png(png, V, F, None, verts, up=up, title=title,
-                   point_size=6.0 if F is not None or len(V) > 2000 else 30.0)
-        info(f"wrote {png}")
-    if ply:
-        write_ply(ply, V, F, None, verts)
-        info(f"wrote {ply}")
+from ..api import landmarks
+from ..landmarks import METHODS, SCORES
+from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
+                     pop_shape_options, shape_options)
 
 
 @click.command("landmarks")
@@ -69,32 +43,21 @@ def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilo
     are the global symmetry score (lower bound with witness) with the first 1, 2, ...
     landmarks fixed: the paper's "vector of symmetry scores".
     """
-    shape_kw = pop_shape_options(kwargs)
+    n_points, options = api_options(pop_shape_options(kwargs))
     user_ids = parse_ids(user_landmarks, "--user-landmarks") if user_landmarks else []
     if method == "user" and not user_ids:
         raise click.UsageError("--method user needs --user-landmarks")
-    loaded = load_geometry_or_matrix(input_spec, shape_kw.get("largest_component", False),
-                                     shape_kw.get("symmetry_map"), shape_kw.get("force", False))
-    shape = build_shape(input_spec, landmarks=user_ids, loaded=loaded, **shape_kw)
-    seed = shape_kw.get("seed", 0)
-    cnbs = method in ("cnbs", "cnbs-scale")
-    if cnbs or scores:  # CNBS: about 4 searches' worth per landmark (measured on TOSCA)
-        check_cost(f"{method} with {k} landmarks at N = {shape.n_samples}",
-                   search_seconds(shape.n_samples, shape.n_targets, (4 if cnbs else 1) * max(k, 1)),
-                   force=shape_kw.get("force", False))
-    kw = {}
-    if method == "user":
-        kw["ids"] = user_ids
-    if method in ("cnbs", "cnbs-scale") and progress_enabled():
-        kw["progress"] = lambda step, done, total: click.echo(
-            f"\rlandmark {step + 1}/{k}: heat map {done}/{total}", err=True, nl=done == total)
-    result = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, score=score,
-                              epsilon=epsilon, **kw)
+    result = landmarks(input_spec, k, method, n_points, user_landmarks=user_ids, scores=scores, effort=effort,
+                       score=score, epsilon=epsilon, **options)
+    up = up or _up(result.shape)
     title = f"{method}: " + ", ".join(f"{v}" for v in result.landmarks)
-    if png or ply:
-        draw_landmarks(shape, result, png, ply, guess_up(shape, up), title)
+    if png:
+        result.plot(path=png, up=up, title=title)
+        info(f"wrote {png}")
+    if ply:
+        _ply(result, ply)
     if html:
-        info(f"wrote {result.to_html(html, up=guess_up(shape, up), title=title)}")
+        info(f"wrote {result.to_html(html, up=up, title=title)}")
     d = result.to_dict()
     if as_json:
         emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds", "score")})
@@ -104,4 +67,23 @@ def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilo
             click.echo(f"{name} without landmarks: {fmt(result.initial_score)}")
         for i, (v, s) in enumerate(zip(result.landmarks, result.scores), 1):
             click.echo(f"{i:3d}  vertex {v:>8d}  {name} after: {fmt(s)}")
-        click.echo(f"{method}, {shape.n_samples} samples, {result.seconds:.2f} s")
+        click.echo(f"{method}, {result.shape.n_samples} samples, {result.seconds:.2f} s")
+
+
+def _up(shape) -> str:
+    from ..viz.scene import guess_up
+
+    return guess_up(shape.geometry)
+
+
+def _ply(result, path) -> None:
+    """The shape with its landmarks painted (PLY; a distance matrix by classical MDS)."""
+    from ..symmetry.starts import classical_mds
+    from ..viz.ply import write_ply
+
+    shape = result.shape
+    if shape.geometry is not None:
+        write_ply(path, shape.geometry.vertices, shape.geometry.faces, None, list(result.vertices))
+    else:
+        write_ply(path, classical_mds(shape.D), None, None, list(result.sample_indices))
+    info(f"wrote {path}")

@@ -6,14 +6,13 @@ Paper Section 5; ``shapecond.deformation``.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import click
 
+from ..api import local_score
 from ..deformation.energy import ALPHA_RANGE, DEFAULT_ALPHA, ENERGIES
-from ..deformation.heatmap import local_heatmap
-from ..deformation.local_score import ZERO_TOL, LocalProblem, LocalScore
-from ..api import require_mesh
-from ..shapes.io import load_input
+from ..deformation.local_score import ZERO_TOL
 from .common import IDS_HELP, Float, emit_json, force_option, info, json_option, parse_ids
 
 
@@ -36,26 +35,13 @@ from .common import IDS_HELP, Float, emit_json, force_option, info, json_option,
 def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, html, force, as_json):
     """Local symmetry score sqrt(2 / lambda_min) of the energy Hessian, with its zero modes."""
     t0 = time.perf_counter()
-    g = require_mesh(load_input(input_spec, force=force))
-    fixed = g.to_internal(parse_ids(landmarks))
-    problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
-    result = problem.score(fixed, zero_tol=zero_tol, ids=g.ids)
-    hm = local_heatmap(problem, fixed, zero_tol=zero_tol) if heatmap_png or html else None
+    result = local_score(input_spec, parse_ids(landmarks), alpha=alpha, energy=energy, zero_tol=zero_tol, force=force)
     if html:
-        from ..output import write_text
-        from ..viz.pages import local_page
-
-        write_text(html, local_page(g, hm, fixed, result=result))
-        info(f"wrote {html}")
+        info(f"wrote {result.to_html(html)}")
     if heatmap_png:
-        from ..viz.render import guess_up, render_png
-
-        render_png(heatmap_png, g.vertices, g.faces, hm.values, landmarks=[int(v) for v in fixed],
-                   up=guess_up(g), title=f"{g.name}: local score with each vertex fixed",
-                   colorbar_label="sigma_inf with the vertex fixed")
+        result.plot(path=heatmap_png)
         info(f"wrote {heatmap_png}")
-    result = LocalScore(result.score, result.lambda_min, result.zero_modes, result.n_vertices,
-                        result.landmarks, time.perf_counter() - t0)
+    result = replace(result, seconds=time.perf_counter() - t0)  # everything, the doubt field included
     if as_json:
         emit_json(result.to_dict())
         return

@@ -8,9 +8,10 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..api import metric_shape
 from ..errors import InputError
 from ..output import write_bytes
-from .common import IDS_HELP, build_shape, emit_json, info, json_option, pop_shape_options, shape_options
+from .common import IDS_HELP, api_options, emit_json, info, json_option, parse_ids, pop_shape_options, shape_options
 
 
 @click.command("sample")
@@ -26,13 +27,12 @@ def command(input_spec, landmarks, output, as_json, **kwargs):
     scale (the raw diameter), metric and backend; every command (and
     ``shapecond.load``) reads it back as a distance-matrix input.
     """
-    shape_kw = pop_shape_options(kwargs)
-    if shape_kw.get("target") == "dense":
+    n_points, options = api_options(pop_shape_options(kwargs))
+    if options["target"] == "dense":
         raise InputError("sample writes the N samples only; --target dense does not apply")
-    shape_kw["target"] = "samples"
     if not str(output).endswith(".npz"):
         raise InputError(f"{output}: the output must be an .npz file")
-    shape = build_shape(input_spec, landmarks=landmarks, **shape_kw)
+    shape = metric_shape(input_spec, n_points, landmarks=parse_ids(landmarks), **{**options, "target": "samples"})
     buffer = io.BytesIO()  # built in memory: a failing write then never leaves numpy's zip half-open
     np.savez(buffer, D=shape.D, samples=shape.sample_ids, scale=shape.scale, metric=shape.metric,
              backend=str(shape.backend), covering_radius=np.nan if shape.covering_radius is None

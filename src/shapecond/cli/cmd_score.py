@@ -11,12 +11,14 @@ matching (``symmetry.verdict``).
 
 from __future__ import annotations
 
+import time
+
 import click
 import numpy as np
 
-from ..symmetry.report import score_shape
-from .common import IDS_HELP, Float, build_shape, emit_json, fmt, info, json_option, load_geometry_or_matrix, \
-    pop_shape_options, shape_options
+from ..api import score
+from .common import IDS_HELP, Float, api_options, emit_json, fmt, info, json_option, parse_ids, pop_shape_options, \
+    shape_options
 
 
 @click.command("score")
@@ -44,35 +46,32 @@ from .common import IDS_HELP, Float, build_shape, emit_json, fmt, info, json_opt
 def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png, epsilon, scale_witness_png,
             html, as_json, **kw):
     """How hard is INPUT to match: σ bracket, κ bracket and the witness map."""
-    import time
-
-    from .common import parse_ids
-
     t0 = time.perf_counter()
-    opts = pop_shape_options(kw)
-    ids = parse_ids(landmarks)
-    loaded = load_geometry_or_matrix(input_spec, opts.get("largest_component", False), opts.get("symmetry_map"),
-                                     opts.get("force", False))
-    shape = build_shape(input_spec, landmarks=ids, loaded=loaded, **opts)
-    result = score_shape(shape, ids, exact=True if exact else "auto", upper=upper, time_limit=time_limit,
-                         seed=opts.get("seed", 0), effort=effort, force=opts.get("force", False),
-                         epsilon=epsilon)
-    report, sc = result.to_dict(), result.score
-    for png, witness in ((witness_png, sc.witness), (scale_witness_png, result.scale.witness)):
-        if not png:
-            continue
-        if shape.geometry is None:
-            info("a witness picture needs a mesh or point cloud; no picture written")
-        else:
-            from ..viz.witness import render_witness_png
-
-            render_witness_png(shape, witness, png, landmarks=tuple(sc.landmarks))
-    if html:
-        info(f"wrote {result.to_html(html)}")
+    n_points, options = api_options(pop_shape_options(kw))
+    result = score(input_spec, n_points, landmarks=parse_ids(landmarks), exact=True if exact else "auto", upper=upper,
+                   time_limit=time_limit, effort=effort, epsilon=epsilon, **options)
+    _pictures(result, witness_png, scale_witness_png, html)
+    report = result.to_dict()
     report["seconds"] = time.perf_counter() - t0  # everything, geodesics included
     if as_json:
         emit_json(report)
-        return
+    else:
+        _print(report, result.score)
+
+
+def _pictures(result, witness_png, scale_witness_png, html) -> None:
+    for png, scale in ((witness_png, False), (scale_witness_png, True)):
+        if not png:
+            continue
+        if result.shape.geometry is None:
+            info("a witness picture needs a mesh or point cloud; no picture written")
+        else:
+            result.plot(path=png, scale=scale)
+    if html:
+        info(f"wrote {result.to_html(html)}")
+
+
+def _print(report: dict, sc) -> None:
     s, h, k = report["sigma"], report["sigma_hat"], report["kappa"]
     click.echo(f"samples N         {report['n_points']}  (targets M = {report['n_targets']}, {report['target']})")
     click.echo(f"sigma             [{fmt(s['lower'])}, {fmt(s['upper'])}]  exact {fmt(s['exact'])}")

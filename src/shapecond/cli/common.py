@@ -1,7 +1,8 @@
 """Options and helpers shared by the sub-commands.
 
-``shape_options`` adds the options that turn an INPUT into a metric shape;
-``build_shape`` does it; ``emit_json`` prints the one JSON object of ``--json``
+``shape_options`` adds the options that turn an INPUT into a metric shape and
+``api_options`` turns them into the keyword arguments of the Python interface
+(``shapecond.api``), which every command calls; ``emit_json`` prints the one JSON object of ``--json``
 (infinite values as the string "inf", missing ones as null).  Numeric options
 use the parameter types ``Int``, ``Float`` and ``SEED``, which call the checks
 of ``shapecond.checks``: a bad value gets the same one-line message as from
@@ -17,14 +18,10 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..checks import check_float, check_int, check_seed, parse_ids
+from ..api import DEFAULT_POINTS
+from ..checks import check_float, check_int, check_seed, parse_ids  # noqa: F401  (parse_ids: the commands')
 from ..errors import InputError
-from ..jsonable import dumps, jsonable  # noqa: F401  (jsonable: used by the commands' tests)
-from ..shapes.geometry import Geometry
-from ..shapes.io import load_input, read_symmetry_map
-from ..shapes.metric import MetricShape
-
-DEFAULT_POINTS = 400
+from ..jsonable import dumps, fmt  # noqa: F401  (fmt: the commands' one number format)
 #: How vertex ids are given, for the help of every ids option (``checks.parse_ids``, ``checks.read_ids``).
 IDS_HELP = ("comma- or space-separated (12,405,877) or a file of ids: every id on every line (1 2 3, 1,2,3 "
             "or one per line; # comments); a BIM .pid line 'ID 0 0 0' gives ID; fractional ids are refused")
@@ -127,31 +124,18 @@ def pop_shape_options(kwargs: dict) -> dict:
     return {k: kwargs.pop(k) for k in SHAPE_OPTION_NAMES if k in kwargs}
 
 
-def load_geometry_or_matrix(input_spec: str, largest_component: bool = False, symmetry_map=None,
-                            force: bool = False):
-    """The user's INPUT as a Geometry (with its symmetry map attached) or a distance matrix."""
-    loaded = load_input(input_spec, largest_component=largest_component, force=force)
-    if symmetry_map is not None:
-        if not isinstance(loaded, Geometry):
-            raise InputError("--symmetry-map needs a mesh or point cloud input")
-        loaded = loaded.with_symmetry(read_symmetry_map(symmetry_map))
-    return loaded
+def api_options(cli_options: dict, progress: bool | None = None) -> tuple[int | None, dict]:
+    """``(n_points, keyword arguments of shapecond.api)`` from the shape options of a command.
 
-
-def build_shape(input_spec: str, landmarks=(), points=None, metric="geodesic", geodesic_backend="heat", seed=0,
-                largest_component=False, no_cache=False, target=None, target_factor=8, symmetry_map=None,
-                loaded=None, force=False, progress=None) -> MetricShape:
-    """Turn INPUT and the shape options into a ``MetricShape`` (``api.metric_shape``); landmarks come first.
-
-    ``progress``: show the sampling's progress bar (default: when stderr is a terminal).
+    ``progress``: progress bars (default: when stderr is a terminal).
     """
-    from ..api import metric_shape
-
-    if loaded is None:
-        loaded = load_geometry_or_matrix(input_spec, largest_component, symmetry_map, force)
-    return metric_shape(loaded, points, landmarks=landmarks, metric=metric, backend=geodesic_backend, seed=seed,
-                        target=target, target_factor=target_factor, cache=not no_cache,
-                        progress=progress_enabled() if progress is None else progress, force=force)
+    o = dict(cli_options)
+    kw = {"metric": o.get("metric", "geodesic"), "backend": o.get("geodesic_backend", "heat"),
+          "seed": o.get("seed", 0), "largest_component": o.get("largest_component", False),
+          "cache": not o.get("no_cache", False), "target": o.get("target"), "target_factor": o.get("target_factor", 8),
+          "symmetry_map": o.get("symmetry_map"), "force": o.get("force", False),
+          "progress": progress_enabled() if progress is None else progress}
+    return o.get("points"), kw
 
 
 def emit_json(obj) -> None:
@@ -161,12 +145,3 @@ def emit_json(obj) -> None:
 
 def json_option(f):
     return click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")(f)
-
-
-def fmt(value, digits: int = 4) -> str:
-    """Human formatting of a score: inf as ∞, None as '-'."""
-    if value is None:
-        return "-"
-    if isinstance(value, float) and math.isinf(value):
-        return "inf"
-    return f"{value:.{digits}g}" if isinstance(value, float) else str(value)

@@ -71,7 +71,6 @@ class LocalScore:
     seconds: float
     eigenvalues: np.ndarray = field(repr=False, default=None)
     modes: np.ndarray = field(repr=False, default=None)
-    drawing: tuple = field(repr=False, default=None)  # (Geometry, settings) for to_html (``api.local_score``)
 
     def to_dict(self) -> dict:
         """JSON-ready summary with exactly the keys of ``shapecond local --json``."""
@@ -83,18 +82,6 @@ class LocalScore:
             "landmarks": [int(v) for v in self.landmarks],
             "seconds": self.seconds,
         })
-
-    def to_html(self, path, **kw) -> str:
-        """Write the doubt field (the local score with each vertex fixed) as a self-contained HTML page;
-        needs a result of ``shapecond.local_score``.  Returns the path."""
-        from ..viz.pages import write_result
-
-        return write_result(self, path, **kw)
-
-    def _repr_html_(self):
-        from ..viz.pages import inline_result
-
-        return inline_result(self)
 
 
 def score_from_lambda(lam: float, zero_tol: float = ZERO_TOL) -> float:

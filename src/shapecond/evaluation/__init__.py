@@ -4,13 +4,13 @@
     landmark_sets   each method's landmarks on a null shape, their scores, cached
     protocols       per target: corresponding, independent, remeshed; errors
     deformation_level  a class's ε from its ground truth, δ(ε) at it
-    run             EvaluationOptions and evaluate_dataset (the phases, in parallel)
+    run             EvaluationOptions, evaluate (``sc.evaluate``) and evaluate_dataset (the phases, in parallel)
     report          Markdown, HTML, JSON and plots of an Evaluation
 """
 
 from .protocols import PROTOCOLS
 from .records import Evaluation, MatchRecord
-from .run import PROTOCOL_CHOICES, EvaluationOptions, evaluate_dataset, evaluation_options
+from .run import PROTOCOL_CHOICES, EvaluationOptions, evaluate, evaluate_dataset, evaluation_options
 
-__all__ = ["Evaluation", "EvaluationOptions", "MatchRecord", "PROTOCOLS", "PROTOCOL_CHOICES", "evaluate_dataset",
-           "evaluation_options"]
+__all__ = ["Evaluation", "EvaluationOptions", "MatchRecord", "PROTOCOLS", "PROTOCOL_CHOICES", "evaluate",
+           "evaluate_dataset", "evaluation_options"]

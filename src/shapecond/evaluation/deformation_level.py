@@ -18,15 +18,14 @@ from .landmark_sets import ShapeSetup
 def class_epsilon(null_path, targets, setup: ShapeSetup) -> float:
     """The median over the targets of the RMS distortion of the ground-truth map on the null
     shape's samples, in units of the null shape's metric shape (diameter 1)."""
+    from ..api import load
     from ..matching.sampled import sample_surface, surface_at
-    from ..shapes.io import load_geometry
-    from ..shapes.metric import metric_shape
 
-    g = load_geometry(null_path)
+    g = load(null_path)
     null = sample_surface(g, setup.n_points, setup.backend, setup.seed, cache=setup.cache)
-    scale = metric_shape(g, setup.n_points, backend=setup.backend, seed=setup.seed, cache=setup.cache).scale
+    scale = setup.metric_shape(g).scale
     iu = np.triu_indices(null.n_samples, 1)
-    rms = [float(np.sqrt(np.mean((null.D - surface_at(load_geometry(p), null.samples, setup.backend,
+    rms = [float(np.sqrt(np.mean((null.D - surface_at(load(p), null.samples, setup.backend,
                                                       setup.cache).D)[iu] ** 2)))
            for p in targets]
     return float(np.median(rms)) * null.unit / scale
@@ -36,13 +35,10 @@ def class_scale_task(cls: str, null_path, targets, sets: dict, setup: ShapeSetup
     """A class's deformation level ε (``class_epsilon``) and, at it, δ(ε) (quick search) of each
     landmark set ``sets[method] = (vertices, counts)`` after each count, non-increasing in the count."""
     from ..landmarks import monotone
-    from ..shapes.io import load_geometry
-    from ..shapes.metric import metric_shape
     from ..symmetry.scale import scale_score
 
     epsilon = class_epsilon(null_path, targets, setup)
-    shape = metric_shape(load_geometry(null_path), setup.n_points, backend=setup.backend, seed=setup.seed,
-                         cache=setup.cache)
+    shape = setup.metric_shape(null_path)
     where = {int(v): i for i, v in enumerate(shape.samples[:shape.n_samples])}
     out = {}
     for method, (vertices, counts) in sets.items():

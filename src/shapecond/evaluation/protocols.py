@@ -91,13 +91,13 @@ def target_task(cls: ClassFolder, target_path, landmark_sets: dict, setup: Match
     ----------
     landmark_sets : dict method -> internal vertex ids of the null shape, in order.
     protocol : one of ``PROTOCOLS``.
-    load : optional callable path -> Geometry (tests); default ``shapes.io.load_geometry``.
+    load : optional callable path -> Geometry (tests); default ``sc.load``.
     """
-    from ..shapes.io import load_geometry
+    from ..api import load as load_shape
 
     if protocol not in PROTOCOLS:
         raise InputError(f"unknown protocol {protocol!r} ({', '.join(PROTOCOLS)})")
-    load = load or load_geometry
+    load = load or load_shape
     if protocol == "remeshed":
         return _remeshed(cls, target_path, landmark_sets, setup, load)
     return _shared_order(cls, target_path, landmark_sets, setup, protocol, load)

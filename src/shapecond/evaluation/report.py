@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
+from shapecond.jsonable import fmt
 from shapecond.matching.metrics import cumulative_curve
 
 THRESHOLDS = np.linspace(0.0, 50.0, 101)  # % of half the geodesic diameter
@@ -92,11 +93,7 @@ def _at_floor(score, floor):
 
 
 def _fmt(v, d=3):
-    if v is None or (isinstance(v, float) and math.isnan(v)):
-        return "-"
-    if isinstance(v, float) and math.isinf(v):
-        return "inf"
-    return f"{v:.{d}g}" if abs(v) < 1e4 else f"{v:.3e}"
+    return fmt(v, d)
 
 
 def markdown(ev, plots=()) -> str:

@@ -143,7 +143,8 @@ def _check_cost(plan: dict, opts: EvaluationOptions) -> None:
     CNBS landmark and 3 searches for the scores; per matching about one second at
     N = 400, growing like N³ (measured on TOSCA by the project's benchmarks).
     """
-    from ..limits import cap_jobs, check_cost, geodesic_seconds, search_seconds
+    from ..limits import check_cost, geodesic_seconds, search_seconds
+    from ..parallel import cap_jobs
 
     n = opts.shape.n_points
     total, n_shapes, n_matchings = 0.0, 0, 0
@@ -167,18 +168,17 @@ def prepare_task(path, setup: ShapeSetup, with_metric: bool = False, null_path=N
     gets its own FPS rows (independent and remeshed protocols) and/or the rows at
     the null shape's sample vertices (corresponding, needs ``null_path``).
     """
+    from ..api import load
     from ..matching.sampled import sample_surface, surface_at
-    from ..shapes.io import load_geometry
-    from ..shapes.metric import metric_shape
 
-    g = load_geometry(path)
+    g = load(path)
     s = setup
     if with_metric or set(protocols) & {"independent", "remeshed"}:
         sample_surface(g, s.n_points, s.backend, s.seed, cache=s.cache)
     if with_metric:
-        metric_shape(g, s.n_points, backend=s.backend, seed=s.seed, cache=s.cache)
+        s.metric_shape(g)
     if null_path is not None and "corresponding" in protocols:
-        null = sample_surface(load_geometry(null_path), s.n_points, s.backend, s.seed, cache=s.cache)
+        null = sample_surface(load(null_path), s.n_points, s.backend, s.seed, cache=s.cache)
         surface_at(g, null.samples, s.backend, s.cache)
     return str(path)
 
@@ -274,5 +274,23 @@ def evaluation_options(**kw) -> EvaluationOptions:
     return EvaluationOptions(**kw)
 
 
-__all__ = ["ClassPlan", "EvaluationOptions", "PROTOCOL_CHOICES", "evaluate_dataset", "evaluation_options",
-           "plan_classes"]
+def evaluate(dataset_dir, **options) -> Evaluation:
+    """The paper's Figure 7 evaluation on class folders (``sc.evaluate``).
+
+    Parameters
+    ----------
+    dataset_dir : a folder of class folders: meshes with one vertex order (TOSCA), or
+        ``shapes/`` + ``corres/*.vts`` folders (the remeshed releases), or one such class.
+    **options : fields of ``EvaluationOptions`` (classes, methods, matchers, protocol, counts,
+        n_points, seed, backend, cache, dense, n_jobs, scheduler, quick, max_targets, progress,
+        force); an unknown name is refused before any work.
+
+    Returns
+    -------
+    Evaluation; write its report with ``shapecond.evaluation.report.write_report``.
+    """
+    return evaluate_dataset(Path(dataset_dir), evaluation_options(**options))
+
+
+__all__ = ["ClassPlan", "EvaluationOptions", "PROTOCOL_CHOICES", "evaluate", "evaluate_dataset",
+           "evaluation_options", "plan_classes"]

@@ -17,7 +17,7 @@ from ..errors import InputError
 
 
 @dataclass(frozen=True)
-class LandmarkResult:
+class LandmarkSelection:
     """Landmarks in selection order with the symmetry score after each one.
 
     Attributes
@@ -50,7 +50,7 @@ class LandmarkResult:
     initial_score: float | None = None
     heat_maps: tuple = field(default=(), repr=False)
     score: str = "sigma"
-    shape: object = field(default=None, repr=False, compare=False)  # the MetricShape, for to_html
+    shape: object = field(default=None, repr=False, compare=False)  # the MetricShape they were chosen on
 
     def to_dict(self) -> dict:
         """JSON-ready dict (keys of the CLI: landmarks, scores, method, seconds, ...)."""
@@ -64,17 +64,9 @@ class LandmarkResult:
             "score": self.score,
         })
 
-    def to_html(self, path, **kw) -> str:
-        """Write the landmarks (in order, with the score after each) as a self-contained HTML page;
-        returns the path."""
-        from ..viz.pages import write_result
 
-        return write_result(self, path, **kw)
-
-    def _repr_html_(self):
-        from ..viz.pages import inline_result
-
-        return inline_result(self)
+#: The name the selection had before the Python interface's ``LandmarkResult`` (which adds pictures).
+LandmarkResult = LandmarkSelection
 
 
 def sample_of_vertex(shape, vertex: int) -> int:
@@ -100,12 +92,12 @@ def sample_of_vertex(shape, vertex: int) -> int:
 
 def make_result(shape, sample_indices, scores, method, seconds, initial_score=None, heat_maps=(),
                 score="sigma"):
-    """Assemble a ``LandmarkResult`` from sample indices (adds ids and vertices)."""
+    """Assemble a ``LandmarkSelection`` from sample indices (adds ids and vertices)."""
     s = [int(i) for i in sample_indices]
     verts = [int(shape.samples[i]) for i in s]
     ids = [int(shape.sample_ids[i]) for i in s]
     clean = []
     for v in scores:
         clean.append(None if v is None else (math.inf if not math.isfinite(v) and v > 0 else float(v)))
-    return LandmarkResult(tuple(ids), tuple(s), tuple(verts), tuple(clean), method, float(seconds),
+    return LandmarkSelection(tuple(ids), tuple(s), tuple(verts), tuple(clean), method, float(seconds),
                           initial_score, tuple(heat_maps), score, shape)

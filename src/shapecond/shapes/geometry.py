@@ -82,16 +82,3 @@ class Geometry:
 
     def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
         return self.vertices.min(axis=0), self.vertices.max(axis=0)
-
-
-def make_geometry(vertices, faces=None, name="shape", symmetry=None) -> Geometry:
-    """A validated ``Geometry`` from arrays; ids are the row indices of ``vertices``.
-
-    Validation is that of a file (``validate.clean_mesh``): unreferenced vertices
-    are dropped (their ids kept), a broken mesh raises ``InputError``.
-    ``symmetry`` gives the mirror row of each row.
-    """
-    from .validate import clean_mesh
-
-    g = clean_mesh(vertices, faces, name)
-    return g if symmetry is None else g.with_symmetry(np.asarray(symmetry, dtype=np.int64))

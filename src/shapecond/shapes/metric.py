@@ -89,7 +89,7 @@ class MetricShape:
         return np.asarray(out, dtype=np.int64)
 
 
-def metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "geodesic", backend: str = "heat",
+def build_metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "geodesic", backend: str = "heat",
                  seed: int = 0, landmarks=(), target: str = "samples", target_factor: int = 8,
                  cache: bool = True, progress: bool = False, force: bool = False) -> MetricShape:
     """Sample a mesh or point cloud into a ``MetricShape`` (landmarks first, FPS order).

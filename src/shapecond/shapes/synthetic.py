@@ -20,7 +20,8 @@ import trimesh
 
 from ..checks import check_float, check_int, check_seed
 from ..errors import InputError, TooLargeError
-from .geometry import Geometry, make_geometry
+from .geometry import Geometry
+from .validate import make_geometry
 
 
 def sphere(subdivisions: int = 4, radius: float = 1.0) -> Geometry:

@@ -163,3 +163,14 @@ def clean_mesh(vertices, faces, name: str, largest_component: bool = False, file
     used[faces.ravel()] = True
     new_index = np.cumsum(used) - 1
     return Geometry(vertices[used], new_index[faces], ids[used], name)
+
+
+def make_geometry(vertices, faces=None, name="shape", symmetry=None) -> Geometry:
+    """A validated ``Geometry`` from arrays; ids are the row indices of ``vertices``.
+
+    Validation is that of a file (``validate.clean_mesh``): unreferenced vertices
+    are dropped (their ids kept), a broken mesh raises ``InputError``.
+    ``symmetry`` gives the mirror row of each row.
+    """
+    g = clean_mesh(vertices, faces, name)
+    return g if symmetry is None else g.with_symmetry(np.asarray(symmetry, dtype=np.int64))

@@ -1,36 +1,32 @@
 """The full answer to "how hard is this shape to match": the result of ``shapecond score``.
 
-``score_shape(shape, landmark_ids)`` runs the symmetry score of a
+``score_report(shape, landmark_ids)`` runs the symmetry score of a
 ``MetricShape`` (the σ bracket of paper Eq. 5, σ̂ = σ√N and the κ bracket of
 Theorem 4.1, ``score.symmetry_score``), the resolution report for dense targets
 (``resolution``), the scale-aware score δ(ε) with its own witness (``scale``)
-and the verdict in words (``verdict``), and returns a ``ScoreResult`` whose
-``to_dict()`` is the JSON object of ``shapecond score --json``; the command
-line and batch scoring both use it, so their numbers cannot drift apart.
+and the verdict in words (``verdict``), and returns a ``ScoreReport`` whose
+``to_dict()`` is the JSON object of ``shapecond score --json``; the Python
+interface (``shapecond.score``, which the command line and batch scoring
+call) adds its pictures, so their numbers cannot drift apart.
 Landmarks and the witnesses are given in the input's own ids.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from shapecond.jsonable import jsonable
+from shapecond.jsonable import fmt, jsonable
 from shapecond.symmetry.resolution import ResolutionReport, coarse_level, refine, resolution_for_shape
 from shapecond.symmetry.scale import ScaleScore, budget_of, describe, scale_score
 from shapecond.symmetry.score import SymmetryScore, symmetry_score
 from shapecond.symmetry.verdict import verdict
 
 
-def _fmt(v: float) -> str:
-    return "inf" if math.isinf(v) else f"{v:.4g}"
-
-
 @dataclass(frozen=True, eq=False)
-class ScoreResult:
+class ScoreReport:
     """σ bracket, κ bracket, witness (input ids), resolution report and verdict of one shape.
 
     Attributes
@@ -61,8 +57,8 @@ class ScoreResult:
         return self.score.kappa_lower, self.score.kappa_upper
 
     @property
-    def witness_ids(self) -> np.ndarray | None:
-        """Input id of the image of each sample under the witness (None for a matrix input: rows)."""
+    def witness_ids(self) -> np.ndarray:
+        """Input id of the image of each sample under the witness (a row for a distance matrix)."""
         return self.shape.target_ids[self.score.witness]
 
     def to_dict(self) -> dict:
@@ -82,26 +78,8 @@ class ScoreResult:
 
     def __repr__(self) -> str:
         lo, hi = self.sigma
-        return (f"ScoreResult(sigma=[{_fmt(lo)}, {_fmt(hi)}], kappa=[{_fmt(self.kappa[0])}, {_fmt(self.kappa[1])}], "
+        return (f"{type(self).__name__}(sigma=[{fmt(lo)}, {fmt(hi)}], kappa=[{fmt(self.kappa[0])}, {fmt(self.kappa[1])}], "
                 f"N={self.score.n_points}, M={self.score.n_targets}, verdict={self.verdict!r})")
-
-    def plot(self, fig=None, **kw):
-        """The witness map drawn on the shape, onto ``fig`` (or a new Figure); returns the Figure."""
-        from shapecond.viz.witness import render_witness_png
-
-        return render_witness_png(self.shape, self.score.witness, None, landmarks=tuple(self.score.landmarks),
-                                  fig=fig, **kw)
-
-    def to_html(self, path, **kw) -> str:
-        """Write the witness map as a self-contained HTML page (``shapecond.viz.pages``); returns the path."""
-        from shapecond.viz.pages import write_result
-
-        return write_result(self, path, **kw)
-
-    def _repr_html_(self):
-        from shapecond.viz.pages import inline_result
-
-        return inline_result(self)
 
 
 def _scale(D, n, lm, epsilon, seed, effort, sc) -> ScaleScore:
@@ -119,8 +97,8 @@ def _scale(D, n, lm, epsilon, seed, effort, sc) -> ScaleScore:
     return describe(D, n, fine.witness, lo.epsilon, lm, time.perf_counter() - t0, fine.maps)
 
 
-def score_shape(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                effort="default", force=False, epsilon=None, search=None) -> ScoreResult:
+def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
+                effort="default", force=False, epsilon=None, search=None) -> ScoreReport:
     """Score a ``MetricShape`` whose samples include the landmarks ``landmark_ids`` (input ids).
 
     ``epsilon``: distortion level of δ(ε) (default ``symmetry.scale.default_epsilon``);
@@ -131,5 +109,5 @@ def score_shape(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10
                         seed=seed, effort=effort, force=force, search=search)
     res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
     delta = _scale(shape.D, shape.n_points, lm, epsilon, seed, effort, sc)
-    return ScoreResult(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta),
+    return ScoreReport(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta),
                        tuple(int(v) for v in landmark_ids), delta)

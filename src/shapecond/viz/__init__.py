@@ -13,7 +13,8 @@
   interpolated to every vertex.
 """
 
-from .heatmap import interpolate_to_vertices, render_heatmap_png
+from .heatmap import render_heatmap_png
+from .scene import interpolate_to_vertices
 from .ply import write_ply
 from .render import DEFAULT_VIEWS, render_png, render_rows
 from .witness import render_witness_png

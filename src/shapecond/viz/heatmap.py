@@ -16,55 +16,10 @@ value.  Two interpolations are offered:
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
-from ..errors import InputError
 from .ply import write_ply
 from .render import render_scene
-from .scene import DEFAULT_VIEWS, heatmap_scene, shape_points
-
-
-def idw(V: np.ndarray, sources, values, k: int = 4) -> np.ndarray:
-    """Inverse-distance weighting of ``values`` at vertices ``sources`` over the ``k`` Euclidean-nearest
-    of them, weights ``1 / (d + ε)²`` (the ``"smooth"`` interpolation); every value must be finite."""
-    src = np.asarray(sources, dtype=np.int64)
-    vals = np.asarray(values, dtype=float)
-    kk = min(k, src.size)
-    d, idx = cKDTree(V[src]).query(V, k=kk)
-    if kk == 1:
-        d, idx = d[:, None], idx[:, None]
-    eps = 1e-9 + 1e-3 * np.median(d[:, -1])
-    w = 1.0 / (d + eps) ** 2
-    return (w * vals[idx]).sum(axis=1) / w.sum(axis=1)
-
-
-def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -> np.ndarray:
-    """Spread per-sample ``values`` ((N,) over X or (M,) over Y) to every vertex.
-
-    Returns an (n_vertices,) array (for a matrix input: one value per point of Y).
-    Non-finite values (σ = ∞) are kept as ``inf`` by ``"nearest"``; ``"smooth"``
-    treats them as the largest finite value so the colour scale stays usable.
-    """
-    values = np.asarray(values, dtype=float)
-    n, m = int(shape.n_samples), int(np.asarray(shape.D).shape[0])
-    if values.shape not in ((n,), (m,)):
-        raise InputError(f"values must have {n} (samples) or {m} (targets) entries, got {values.shape}")
-    V, _, pts, _ = shape_points(shape)
-    src = pts[: values.size]
-    if method == "nearest":
-        near = getattr(shape, "nearest", None)
-        if values.size == m and near is not None and getattr(shape, "geometry", None) is not None:
-            return values[np.asarray(near)]
-        _, idx = cKDTree(V[src]).query(V)
-        return values[idx]
-    if method != "smooth":
-        raise InputError(f"unknown interpolation {method!r} (nearest or smooth)")
-    vals = values.copy()
-    finite = np.isfinite(vals)
-    if not finite.any():
-        return np.full(V.shape[0], np.inf)
-    vals[~finite] = vals[finite].max()
-    return idw(V, src, vals, k)
+from .scene import DEFAULT_VIEWS, heatmap_scene, interpolate_to_vertices, shape_points  # noqa: F401
 
 
 def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = None, views=DEFAULT_VIEWS,

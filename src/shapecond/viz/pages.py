@@ -18,22 +18,15 @@ from the same scenes as the PNGs (``viz.scene``):
 from __future__ import annotations
 
 import html as _html
-import math
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import InputError
+from ..jsonable import fmt
 from .html import MAX_DISPLAY_VERTICES, page, summary, table, viewer
 from .scene import (DEFAULT_VIEWS, colour_layer, guess_up, heatmap_scene, landmark_scene, make_scene,
                     position_colours, witness_scene)
-
-
-def _f(v) -> str:
-    if v is None:
-        return "-"
-    v = float(v)
-    return "inf" if math.isinf(v) else f"{v:.4g}"
 
 
 def _name(shape) -> str:
@@ -54,14 +47,14 @@ def score_page(result, title: str | None = None) -> str:
         wide = witness_scene(shape, result.scale.witness, landmarks=tuple(sc.landmarks)).layers[1]
         from dataclasses import replace
 
-        layers.append(replace(wide, label=f"scale-aware witness, δ(ε) = {_f(result.scale.displacement)}"))
+        layers.append(replace(wide, label=f"scale-aware witness, δ(ε) = {fmt(result.scale.displacement)}"))
     scene = scene.with_layers(layers)
     if note:
         from dataclasses import replace
 
         scene = replace(scene, notes=(note,))
     lo, hi = result.sigma
-    lines = [f"sigma    [{_f(lo)}, {_f(hi)}]   kappa [{_f(result.kappa[0])}, {_f(result.kappa[1])}]",
+    lines = [f"sigma    [{fmt(lo)}, {fmt(hi)}]   kappa [{fmt(result.kappa[0])}, {fmt(result.kappa[1])}]",
              f"samples  N = {sc.n_points}, targets M = {sc.n_targets}",
              f"landmarks {', '.join(map(str, result.landmarks)) or 'none'}",
              f"verdict  {result.verdict}"]
@@ -91,13 +84,13 @@ def landmarks_page(shape, result, *, up=None, title=None) -> str:
     V, F, pts, ids = shape_points(shape)
     verts = list(result.vertices) if shape.geometry is not None else [int(pts[i]) for i in result.sample_indices]
     name = "δ(ε)" if result.score == "scale" else "σ"
-    notes = [f"{name} after: {_f(s)}" for s in result.scores] if result.scores else ()
+    notes = [f"{name} after: {fmt(s)}" for s in result.scores] if result.scores else ()
     scene = landmark_scene(V, F, verts, ids=ids, up=up or guess_up(shape.geometry), title=title, notes=notes,
                            label=f"{result.method} landmarks")
-    rows = [(i + 1, v, _f(s) if i < len(result.scores) else "-")
+    rows = [(i + 1, v, fmt(s) if i < len(result.scores) else "-")
             for i, (v, s) in enumerate(zip(result.landmarks, list(result.scores) + [None] * len(result.landmarks)))]
     body = [summary([f"method {result.method}, {shape.n_samples} samples, {result.seconds:.2f} s",
-                     f"{name} without these landmarks: {_f(result.initial_score)}"]),
+                     f"{name} without these landmarks: {fmt(result.initial_score)}"]),
             viewer(scene), table(["#", "vertex id", f"{name} after"], rows)]
     return page(f"shapecond landmarks: {result.method} on {_name(shape)}", body)
 
@@ -112,7 +105,7 @@ def local_page(geometry, heatmap, fixed=(), *, result=None, title=None) -> str:
                          landmarks=[int(v) for v in fixed], label="doubt field")
     scene = make_scene(geometry.vertices, geometry.faces, [layer], up=guess_up(geometry), ids=geometry.ids,
                        title=title)
-    lines = [] if result is None else [f"local score σ_inf {_f(result.score)}, λ_min {_f(result.lambda_min)}",
+    lines = [] if result is None else [f"local score σ_inf {fmt(result.score)}, λ_min {fmt(result.lambda_min)}",
                                        f"zero modes: {', '.join(result.zero_modes) or 'none'}"]
     body = [summary(lines) if lines else "", viewer(scene),
             "<p>Where fixing one more vertex would lower the local score most (low values: good landmarks "
@@ -148,7 +141,7 @@ def match_errors(src, tgt, vmap, truth, n_points: int = 200, backend: str = "hea
     from ..matching.metrics import errors_from_rows, normalise
     from ..shapes.geodesics import DistanceSolver
     from ..shapes.sampling import farthest_point_sampling
-    from .heatmap import idw
+    from .scene import idw
 
     k = min(int(n_points), src.n_vertices)
     samples = np.asarray(farthest_point_sampling(DistanceSolver(src, "euclidean"), k, seed=0).samples, np.int64)
@@ -276,7 +269,7 @@ def class_scene(geometry, sets: dict, scores: dict, cls: str):
     layers = []
     for method, verts in sets.items():
         sc = scores.get(method, {})
-        notes = tuple(f"σ after {i + 1}: {_f(sc[i + 1])}" if (i + 1) in sc else "" for i in range(len(verts)))
+        notes = tuple(f"σ after {i + 1}: {fmt(sc[i + 1])}" if (i + 1) in sc else "" for i in range(len(verts)))
         layers.append(dict(values=None, landmarks=list(verts), notes=notes, label=method))
     return make_scene(geometry.vertices, geometry.faces, layers, up=guess_up(geometry), ids=geometry.ids,
                       views=DEFAULT_VIEWS, title=f"{cls}: null shape with each method's landmarks")
@@ -308,11 +301,11 @@ def demo_page(shape, score, small, values, chosen) -> str:
     witness = witness_scene(shape, score.witness, up="y", title="the witness map of the symmetry score")
     heat = heatmap_scene(small, values, up="y", title="σ with each point fixed (CNBS heat map)")
     g = small.geometry
-    notes = [f"σ after: {_f(s)}" for s in chosen.scores]
+    notes = [f"σ after: {fmt(s)}" for s in chosen.scores]
     marks = landmark_scene(g.vertices, g.faces, [int(small.samples[i]) for i in chosen.sample_indices], ids=g.ids,
                            up="y", title="three CNBS landmarks", notes=notes)
     lo, hi = score.sigma_lower, score.sigma_upper
-    body = [summary([f"sigma [{_f(lo)}, {_f(hi)}] on demo:animal ({g.n_vertices} vertices, N = {shape.n_points})",
+    body = [summary([f"sigma [{fmt(lo)}, {fmt(hi)}] on demo:animal ({g.n_vertices} vertices, N = {shape.n_points})",
                      f"CNBS landmarks (N = {small.n_points}): {', '.join(map(str, chosen.landmarks))}"]),
             viewer(witness, heading="Witness map"), viewer(heat, heading="Heat map"),
             viewer(marks, heading="Landmarks")]
@@ -328,15 +321,15 @@ def result_page(result, **kw) -> str:
         return score_page(result, **kw)
     if kind == "HeatMapResult":
         return heatmap_page(result.shape, result.plot_values(), landmarks=range(len(result.landmarks)),
-                            lines=[f"{result.score} before: {_f(result.sigma_before)}; best landmark: vertex "
-                                   f"{result.best} ({_f(result.best_value)})"], **kw)
+                            lines=[f"{result.score} before: {fmt(result.sigma_before)}; best landmark: vertex "
+                                   f"{result.best} ({fmt(result.best_value)})"], **kw)
     if kind == "LandmarkResult":
         if getattr(result, "shape", None) is None:
             raise InputError("this LandmarkResult does not know its shape; use shapecond.landmarks()")
         return landmarks_page(result.shape, result, **kw)
     if kind == "MatchResult":
         return _match_result_page(result, **kw)
-    if kind == "LocalScore":
+    if kind == "LocalResult":
         return _local_result_page(result, **kw)
     raise InputError(f"no HTML page for a {kind}")
 
@@ -366,17 +359,9 @@ def _match_result_page(result, truth=None, **kw) -> str:
 
 
 def _local_result_page(result, **kw) -> str:
-    from ..deformation.heatmap import local_heatmap
-    from ..deformation.local_score import LocalProblem
-
-    drawing = getattr(result, "drawing", None)
-    if drawing is None:
-        raise InputError("this LocalScore does not know its mesh; use shapecond.local_score()")
-    g, settings = drawing
-    problem = LocalProblem(g.vertices, g.faces, alpha=settings["alpha"], energy=settings["energy"])
-    fixed = g.to_internal(result.landmarks)
-    hm = local_heatmap(problem, fixed, zero_tol=settings["zero_tol"])
-    return local_page(g, hm, fixed, result=result, **kw)
+    hm = result.doubt()  # InputError when the result does not know its mesh
+    g = result.drawing[0]
+    return local_page(g, hm, g.to_internal(result.landmarks), result=result, **kw)
 
 
 def write_result(result, path, **kw) -> str:

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 
 import matplotlib
 import numpy as np
+from scipy.spatial import cKDTree
 
 from ..errors import InputError
 
@@ -264,12 +265,53 @@ def shape_points(shape):
     return V, None, np.arange(V.shape[0]), np.arange(V.shape[0])
 
 
+def idw(V: np.ndarray, sources, values, k: int = 4) -> np.ndarray:
+    """Inverse-distance weighting of ``values`` at vertices ``sources`` over the ``k`` Euclidean-nearest
+    of them, weights ``1 / (d + ε)²`` (the ``"smooth"`` interpolation); every value must be finite."""
+    src = np.asarray(sources, dtype=np.int64)
+    vals = np.asarray(values, dtype=float)
+    kk = min(k, src.size)
+    d, idx = cKDTree(V[src]).query(V, k=kk)
+    if kk == 1:
+        d, idx = d[:, None], idx[:, None]
+    eps = 1e-9 + 1e-3 * np.median(d[:, -1])
+    w = 1.0 / (d + eps) ** 2
+    return (w * vals[idx]).sum(axis=1) / w.sum(axis=1)
+
+
+def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -> np.ndarray:
+    """Spread per-sample ``values`` ((N,) over X or (M,) over Y) to every vertex.
+
+    Returns an (n_vertices,) array (for a matrix input: one value per point of Y).
+    Non-finite values (σ = ∞) are kept as ``inf`` by ``"nearest"``; ``"smooth"``
+    treats them as the largest finite value so the colour scale stays usable.
+    """
+    values = np.asarray(values, dtype=float)
+    n, m = int(shape.n_samples), int(np.asarray(shape.D).shape[0])
+    if values.shape not in ((n,), (m,)):
+        raise InputError(f"values must have {n} (samples) or {m} (targets) entries, got {values.shape}")
+    V, _, pts, _ = shape_points(shape)
+    src = pts[: values.size]
+    if method == "nearest":
+        near = getattr(shape, "nearest", None)
+        if values.size == m and near is not None and getattr(shape, "geometry", None) is not None:
+            return values[np.asarray(near)]
+        _, idx = cKDTree(V[src]).query(V)
+        return values[idx]
+    if method != "smooth":
+        raise InputError(f"unknown interpolation {method!r} (nearest or smooth)")
+    vals = values.copy()
+    finite = np.isfinite(vals)
+    if not finite.any():
+        return np.full(V.shape[0], np.inf)
+    vals[~finite] = vals[finite].max()
+    return idw(V, src, vals, k)
+
+
 def heatmap_scene(shape, values, *, landmarks=(), up=None, method="smooth", cmap="turbo",
                   colorbar_label="σ with the point fixed", log=None, **place) -> Scene:
     """The heat map of ``viz.heatmap.render_heatmap_png`` as a Scene (see there for the arguments);
     ``place``: ``views`` and ``title`` (``make_scene``)."""
-    from .heatmap import interpolate_to_vertices
-
     V, F, pts, ids = shape_points(shape)
     vv = interpolate_to_vertices(shape, values, method=method)
     finite = vv[np.isfinite(vv)]
@@ -295,7 +337,6 @@ def position_colours(V: np.ndarray) -> np.ndarray:
 def witness_scene(shape, witness, *, landmarks=(), up=None, views=DEFAULT_VIEWS, max_segments: int = 80,
                   title=None) -> Scene:
     """The two rows of ``viz.witness.render_witness_png`` (reference colours, their pull-back) as a Scene."""
-    from scipy.spatial import cKDTree
 
     D = np.asarray(shape.D, dtype=float)
     n = int(shape.n_samples)

@@ -1,0 +1,36 @@
+"""The Python interface, ``import shapecond as sc``: the one front door to the library.
+
+The command line, batch scoring and the evaluation call these functions; none
+of them turns an input into a shape or a result on its own, so the validation
+(``options``), the cost guards (``guards``) and the numbers are the same from
+every door.
+
+* ``inputs``: ``load`` (a path, ``"demo:NAME"``, trimesh object, ``(V, F)``,
+  points or distance matrix → a validated ``Geometry`` or matrix), ``info``,
+  ``metric_shape`` (N farthest-point samples and their distances, diameter 1);
+* ``scores``: ``score`` (σ bracket, Eq. 5; κ bracket, Theorem 4.1; δ(ε);
+  verdict), ``local_score`` (Section 5), ``landmarks`` (CNBS and baselines,
+  Section 6), ``heatmap`` (Figures 1 and 4), ``kappa`` (probes of Eq. 4);
+* ``problem``: ``SymmetryProblem``, one shape whose searches are kept for
+  repeated queries;
+* ``matching``: ``match``, a dense map between two shapes guided by landmarks;
+* ``results``: what they return (frozen dataclasses with ``to_dict()``,
+  ``plot()``, ``to_html()``, short reprs).
+
+Vertex ids, in and out, are the input's own (file vertex ids; matrix rows).
+Every function raises :class:`~shapecond.errors.InputError` (a ``ValueError``)
+with a one-line message for unusable input, an unknown keyword or work beyond
+``shapecond.limits`` without ``force=True`` (``TooLargeError``), and
+:class:`~shapecond.errors.OutputError` (an ``OSError``) for a file it cannot write.
+"""
+
+from .inputs import DEFAULT_POINTS, info, load, metric_shape, require_mesh
+from .matching import match
+from .options import ShapeOptions
+from .problem import SymmetryProblem
+from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, MatchResult, ScoreResult
+from .scores import heatmap, kappa, landmarks, local_score, score
+
+__all__ = ["DEFAULT_POINTS", "HeatMapResult", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult",
+           "ScoreResult", "ShapeOptions", "SymmetryProblem", "heatmap", "info", "kappa", "landmarks", "load",
+           "local_score", "match", "metric_shape", "require_mesh", "score"]

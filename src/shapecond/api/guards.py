@@ -1,0 +1,67 @@
+"""Cost guards of the Python interface: work estimated beyond ``shapecond.limits`` is refused
+before it starts (``TooLargeError`` with the estimate), unless ``force=True``.
+
+The geodesics of a metric shape are guarded where they are computed
+(``shapes.metric``), exact σ and the LP where they are solved (``symmetry.score``),
+the κ probes in ``symmetry.condition``; what is guarded here is the work that
+the interface composes from several searches: CNBS landmark selection, heat
+maps, and a matching's geodesics and LH05 affinity matrix.  Per-unit costs are
+``limits.search_seconds`` (a default witness search, measured at N = 400) and
+``limits.geodesic_seconds``.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+from ..checks import check_int
+from ..errors import TooLargeError
+from ..limits import (check_cost, geodesic_seconds, human_bytes, lh05_affinity_bytes, metric_bytes,
+                      search_seconds)
+
+#: Witness searches a CNBS step or a heat map costs, in units of one default search (measured on TOSCA).
+SEARCHES_PER_HEAT_MAP = 4
+
+
+def guard_landmarks(shape, k: int, method: str, scores, force: bool) -> None:
+    """CNBS: about ``SEARCHES_PER_HEAT_MAP`` searches per landmark; a baseline with ``scores``: one."""
+    cnbs = method in ("cnbs", "cnbs-scale")
+    if cnbs or scores:
+        check_cost(f"{method} with {k} landmarks at N = {shape.n_samples}",
+                   search_seconds(shape.n_samples, shape.n_targets, (SEARCHES_PER_HEAT_MAP if cnbs else 1) * max(k, 1)),
+                   force=force)
+
+
+def guard_heat_map(shape, force: bool) -> None:
+    """A heat map: about ``SEARCHES_PER_HEAT_MAP`` searches."""
+    check_cost(f"the heat map at N = {shape.n_samples}",
+               search_seconds(shape.n_samples, shape.n_targets, SEARCHES_PER_HEAT_MAP), force=force)
+
+
+def matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, what: str) -> float:
+    """Memory of the matcher itself (LH05's dense affinity matrix), checked before any geodesic:
+    beyond ``spectral.MAX_AFFINITY_BYTES`` the matcher refuses whatever ``force`` says."""
+    if matcher != "lh05":
+        return 0.0
+    from ..matching.nested import core_size
+    from ..matching.spectral import MAX_AFFINITY_BYTES, lh05_match
+
+    k = options.get("k", inspect.signature(lh05_match).parameters["k"].default)
+    nested = options.get("nested", True) and core_size(n_landmarks) is not None
+    nbytes = lh05_affinity_bytes(n_points, core_size(n_landmarks) if nested else n_landmarks, check_int(k, "k", lo=1))
+    if nbytes > MAX_AFFINITY_BYTES:
+        raise TooLargeError(f"{what}: LH05's affinity matrix would need about {human_bytes(nbytes)}, more than the "
+                            f"{human_bytes(MAX_AFFINITY_BYTES)} it allows; use fewer samples or a smaller k "
+                            "(--k), or the faq matcher")
+    return nbytes
+
+
+def guard_match(n_vertices: int, n_points: int, n_landmarks: int, options, force: bool) -> None:
+    """Two shapes' geodesics (2N sources each way) and the matcher's memory (``matcher_bytes``).
+
+    ``options``: the ``matching.pipeline.MatchOptions`` of the matching.
+    """
+    what = f"matching with {n_points} samples on {n_vertices} vertices ({options.backend} distances)"
+    nbytes = matcher_bytes(options.matcher, n_points, n_landmarks, options.matcher_options, what)
+    check_cost(what, 2 * geodesic_seconds(n_vertices, n_points, options.backend),
+               2 * metric_bytes(n_points, n_vertices) + nbytes, force)

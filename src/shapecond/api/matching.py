@@ -1,0 +1,125 @@
+"""Landmark-guided matching of two shapes through the Python interface (``matching.pipeline``)."""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+
+from ..checks import check_int, check_seed, parse_ids
+from ..errors import InputError
+from .guards import guard_match
+from .inputs import DEFAULT_POINTS, load
+from .options import BACKENDS, check_choice, check_flag
+from .results import MatchResult
+
+#: Keywords of ``match`` besides the matcher's own options.
+_SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "largest_component": False}
+
+
+def _matcher_options(matcher: str, options: dict) -> dict:
+    """The sample matcher's own options, refused before any work when unknown."""
+    from ..matching.pipeline import MATCHERS
+    from ..matching.seeded import faq_match
+    from ..matching.spectral import lh05_match
+
+    check_choice(matcher, "matcher", MATCHERS)
+    known = set()
+    if matcher != "zoomout":
+        known = set(list(inspect.signature(lh05_match if matcher == "lh05" else faq_match).parameters)[4:]) - {"seed"}
+    if set(options) - known:  # refused before the geodesics, not as a TypeError after them
+        raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
+                         f"{matcher!r} (its options: {', '.join(sorted(known)) or 'none'})")
+    return options
+
+
+def _match_options(matcher, n_points, dense, samples, options: dict):
+    """``MatchOptions`` and the load settings from ``match``'s keywords (each checked once)."""
+    from ..matching.pipeline import MatchOptions
+
+    settings = {k: options.pop(k, v) for k, v in _SETTINGS.items()}
+    opts = MatchOptions(matcher=matcher, n_points=check_int(n_points, "n_points", lo=3),
+                        backend=check_choice(settings["backend"], "backend", BACKENDS),
+                        seed=check_seed(settings["seed"]), dense=dense, samples=samples,
+                        cache=check_flag(settings["cache"], "cache"),
+                        matcher_options=_matcher_options(matcher, options))
+    return opts, check_flag(settings["largest_component"], "largest_component"), check_flag(settings["force"], "force")
+
+
+def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
+    from ..matching.pipeline import match_samples
+
+    if not (isinstance(src, np.ndarray) and isinstance(tgt, np.ndarray)):
+        raise InputError("match two meshes/point clouds or two distance matrices, not one of each")
+    if opts.samples != "fps":
+        raise InputError("samples 'same-ids' needs two meshes or point clouds, not distance matrices")
+    if opts.matcher == "zoomout":
+        raise InputError("the zoomout matcher needs two meshes or point clouds (a Laplace-Beltrami basis), "
+                         "not distance matrices")
+    for name, ids, D in (("source", ids_s, src), ("target", ids_t, tgt)):
+        bad = [v for v in ids if v >= D.shape[0]]
+        if bad:
+            raise InputError(f"{name} landmark {bad[0]} is out of range (rows 0..{D.shape[0] - 1})")
+    if tgt.shape[0] < src.shape[0]:
+        raise InputError(f"the target matrix has fewer rows ({tgt.shape[0]}) than the source ({src.shape[0]})")
+    sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, opts.matcher, seed=opts.seed,
+                       **opts.matcher_options)
+    summary.update(n_points=int(src.shape[0]), matcher_info=sm.info)
+    return MatchResult(np.asarray(sm.t, dtype=np.int64), summary)
+
+
+def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
+          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", samples: str = "fps", **options) -> MatchResult:
+    """Match ``source`` to ``target`` with corresponding landmarks fixed (input ids, same order).
+
+    Parameters
+    ----------
+    source, target : two meshes/point clouds (any input of ``load``), or two distance matrices
+        (then the map is between their rows).
+    landmarks_source, landmarks_target : corresponding input vertex ids, same order.
+    matcher : "lh05" (Leordeanu–Hebert on ``n_points`` FPS samples, the paper's), "faq" (seeded
+        graph matching on the samples) or "zoomout" (from the landmarks alone; at least 3).
+    dense : how the map reaches every vertex: "zoomout" (landmark-anchored ZoomOut on the
+        Laplace–Beltrami bases, ``matching.zoomout``), or the plain extensions of the sample
+        map "distances" and "nearest" (``matching.dense``).
+    samples : "fps" (each shape its own samples) or "same-ids" (the target sampled at the
+        source's sample vertices: shapes with one vertex order; the summary gives the error).
+    **options : ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``, and
+        the sample matcher's own options (lh05: ``k``, ``rounding``, ``refine``...).
+
+    Returns
+    -------
+    MatchResult: ``.map[i]`` the target id of source id i (-1: a vertex dropped on loading),
+    ``.summary``, ``.to_html()``.
+
+    Examples
+    --------
+    >>> import shapecond as sc
+    >>> r = sc.match("demo:animal", "demo:animal", [0, 100, 200], [0, 100, 200], n_points=40, cache=False)
+    >>> r.map.shape[0] == sc.load("demo:animal").n_vertices
+    True
+    """
+    from ..matching.pipeline import match_shapes
+
+    opts, largest, force = _match_options(matcher, n_points, dense, samples, dict(options))
+    ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
+    if len(ids_s) != len(ids_t):
+        raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
+    src = load(source, largest_component=largest, force=force)
+    tgt = load(target, largest_component=largest, force=force)
+    summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
+    if isinstance(src, np.ndarray) or isinstance(tgt, np.ndarray):
+        return _match_matrices(src, tgt, ids_s, ids_t, opts, summary)
+    guard_match(max(src.n_vertices, tgt.n_vertices), opts.n_points, len(ids_s), opts, force)
+    m = match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), opts)
+    lines = np.full(int(src.ids.max()) + 1, -1, dtype=np.int64)
+    lines[src.ids] = tgt.ids[m.vertex_map]
+    summary.update(n_points=opts.n_points, n_source_vertices=int(src.n_vertices),
+                   n_target_vertices=int(tgt.n_vertices), backend=opts.backend, dense=opts.dense,
+                   samples=opts.samples, matcher_info=m.sample_map.info if m.sample_map is not None else {})
+    if opts.samples == "same-ids":
+        summary.update(sample_error=m.info["sample_error"], exact=m.info["exact"])
+    return MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)))
+
+
+__all__ = ["match"]

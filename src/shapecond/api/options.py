@@ -1,0 +1,80 @@
+"""The options of the Python interface, each validated in one place.
+
+Every public function of ``shapecond`` takes the options that turn an input
+into a metric shape as keyword arguments (``seed=1, backend="fmm", ...``).
+``ShapeOptions.take`` pops them from a function's ``**options``, checks each
+one (``InputError`` naming the Python parameter) and refuses a keyword that
+the function does not know, so that ``score(x, cach=False)`` fails before any
+work instead of being ignored or failing as a ``TypeError`` after it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+from ..checks import check_choice, check_flag, check_int, check_seed
+from ..errors import InputError
+
+METRICS = ("geodesic", "euclidean")
+BACKENDS = ("heat", "fmm", "exact")
+TARGETS = ("samples", "dense")
+EFFORTS = ("quick", "default", "thorough")
+
+
+def refuse_unknown(options: dict, caller: str) -> None:
+    """``InputError`` when ``options`` (what a function's ``**options`` did not consume) is not empty."""
+    if options:
+        raise InputError(f"{caller}() got an unknown keyword argument {sorted(options)[0]!r}")
+
+
+@dataclass(frozen=True)
+class ShapeOptions:
+    """How an input becomes a metric shape (``inputs.metric_shape``).
+
+    Attributes
+    ----------
+    metric : "geodesic" or "euclidean".
+    backend : geodesic solver, "heat" (default), "fmm" or "exact" (``shapes.geodesics``).
+    seed : seed of every random choice (farthest-point sampling's start, the searches).
+    target : "dense" (maps may send samples to M = ``target_factor`` x N targets; default for
+        meshes and point clouds) or "samples" (the paper's bijections; the only choice for a matrix).
+    target_factor : M / N for dense targets.
+    cache : read and write the on-disk cache (``shapecond.cache``).
+    progress : progress bars on stderr.
+    force : run work estimated beyond ``shapecond.limits`` (time or memory) anyway.
+    largest_component : keep only the largest connected component of a mesh.
+    symmetry_map : a ``.sym`` path or an array (mirror vertex id of each vertex id): sample in mirror pairs.
+    """
+
+    metric: str = "geodesic"
+    backend: str = "heat"
+    seed: int = 0
+    target: str | None = None
+    target_factor: int = 8
+    cache: bool = True
+    progress: bool = False
+    force: bool = False
+    largest_component: bool = False
+    symmetry_map: object = None
+
+    def __post_init__(self):
+        check_choice(self.metric, "metric", METRICS)
+        check_choice(self.backend, "backend", BACKENDS)
+        if self.target is not None:
+            check_choice(self.target, "target", TARGETS)
+        object.__setattr__(self, "seed", check_seed(self.seed, "seed"))
+        object.__setattr__(self, "target_factor", check_int(self.target_factor, "target_factor", lo=1, hi=1000))
+        for name in ("cache", "progress", "force", "largest_component"):
+            object.__setattr__(self, name, check_flag(getattr(self, name), name))
+
+    @classmethod
+    def take(cls, options: dict, caller: str, others=()) -> tuple[ShapeOptions, dict]:
+        """Split ``options`` into ``ShapeOptions`` and the keywords named in ``others``.
+
+        Any other keyword is refused (``refuse_unknown``) before anything is computed.
+        """
+        names = {f.name for f in fields(cls)}
+        mine = {k: v for k, v in options.items() if k in names}
+        rest = {k: v for k, v in options.items() if k not in names}
+        refuse_unknown({k: v for k, v in rest.items() if k not in others}, caller)
+        return cls(**mine), rest

@@ -1,0 +1,242 @@
+"""What the Python interface returns: the results of the maths with their pictures.
+
+The maths returns plain results (``symmetry.report.ScoreReport``,
+``landmarks.result.LandmarkSelection``, ``deformation.local_score.LocalScore``)
+and never imports the pictures.  Here each one becomes a result of the
+interface, the same fields plus:
+
+* ``plot(fig=None, path=None)``: a matplotlib Figure (four views), drawn onto
+  ``fig`` without touching the global backend, or written to ``path`` (PNG);
+* ``to_html(path)``: a self-contained page to turn in a browser (``viz.pages``);
+* ``_repr_html_()``: that page inline in a notebook;
+* a short ``repr`` (a few numbers, never whole arrays) and ``to_dict()``, valid
+  JSON as it is (``inf`` as ``"inf"``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from ..deformation.local_score import LocalScore
+from ..errors import InputError
+from ..jsonable import fmt, jsonable
+from ..landmarks.result import LandmarkSelection
+from ..symmetry.condition import ProbeResult
+from ..symmetry.report import ScoreReport
+
+
+def promote(result, cls, **extra):
+    """``result`` (a maths dataclass) as the interface's subclass ``cls``, with ``extra`` fields set."""
+    values = {f.name: getattr(result, f.name) for f in fields(result) if f.init}
+    return cls(**values, **extra)
+
+
+class Pictures:
+    """``to_html`` and ``_repr_html_`` of every result (``viz.pages`` chooses the page by type)."""
+
+    def to_html(self, path, **kw) -> str:
+        """Write this result as a self-contained HTML page; returns the path."""
+        from ..viz.pages import write_result
+
+        return write_result(self, path, **kw)
+
+    def _repr_html_(self):
+        from ..viz.pages import inline_result
+
+        return inline_result(self)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ScoreResult(ScoreReport, Pictures):
+    """σ bracket (paper Eq. 5), κ bracket (Theorem 4.1), witness, δ(ε) and verdict of one shape.
+
+    Attributes beyond ``ScoreReport``'s: none; ``.sigma``, ``.kappa``,
+    ``.witness_ids``, ``.verdict``, ``.scale`` (δ(ε)) are the report's.
+    """
+
+    def plot(self, fig=None, path=None, *, scale: bool = False, **kw):
+        """The witness map (``scale=True``: the scale-aware witness of δ(ε)) drawn on the shape.
+
+        Onto ``fig`` (or a new Figure) and returned, or written to ``path`` (PNG; returns the path).
+        """
+        from ..viz.witness import render_witness_png
+
+        if self.shape.geometry is None and path is not None:
+            raise InputError("a witness picture needs a mesh or point cloud")
+        witness = self.scale.witness if scale else self.score.witness
+        return render_witness_png(self.shape, witness, path, landmarks=tuple(self.score.landmarks), fig=fig, **kw)
+
+
+@dataclass(frozen=True)
+class LandmarkResult(LandmarkSelection, Pictures):
+    """Landmarks in selection order (the input's ids) with the score after each (paper Section 6)."""
+
+    def __repr__(self) -> str:
+        scores = ", ".join("-" if s is None else f"{s:.4g}" for s in self.scores)
+        return f"LandmarkResult({self.method}, landmarks={list(self.landmarks)}, {self.score} after each: [{scores}])"
+
+    def plot(self, fig=None, path=None, **kw):
+        """The landmarks (paper Figure 6 colours) drawn on the shape; onto ``fig`` or written to ``path``."""
+        from ..symmetry.starts import classical_mds
+        from ..viz.render import new_figure, render_png
+
+        shape = self.shape
+        if shape.geometry is not None:
+            V, F, verts = shape.geometry.vertices, shape.geometry.faces, list(self.vertices)
+        else:  # a distance matrix: its points placed by classical MDS
+            V, F, verts = classical_mds(shape.D), None, list(self.sample_indices)
+        size = 6.0 if F is not None or len(V) > 2000 else 30.0
+        if path is None:
+            fig = fig if fig is not None else new_figure()
+        return render_png(path, V, F, None, verts, point_size=size, fig=fig, **kw)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class LocalResult(LocalScore, Pictures):
+    """Local symmetry score σ_∞ = sqrt(2/λ_min) (paper Section 5) with its mesh, to draw the doubt field."""
+
+    drawing: tuple = field(repr=False, default=None)  # (Geometry, its LocalProblem, zero_tol)
+    _doubt: dict = field(repr=False, default_factory=dict, compare=False)
+
+    def doubt(self):
+        """The local score with each vertex fixed in turn (modal approximation, ``deformation.heatmap``);
+        computed once, from the factorisation the score used."""
+        from ..deformation.heatmap import local_heatmap
+
+        if self.drawing is None:
+            raise InputError("this result does not know its mesh; use shapecond.local_score()")
+        if "field" not in self._doubt:
+            g, problem, zero_tol = self.drawing
+            self._doubt["field"] = local_heatmap(problem, g.to_internal(self.landmarks), zero_tol=zero_tol)
+        return self._doubt["field"]
+
+    def plot(self, fig=None, path=None, **kw):
+        """The doubt field (``doubt``) drawn on the mesh; onto ``fig`` or written to ``path``."""
+        from ..viz.render import new_figure, render_png
+        from ..viz.scene import guess_up
+
+        hm = self.doubt()
+        g = self.drawing[0]
+        if path is None:
+            fig = fig if fig is not None else new_figure()
+        kw.setdefault("title", f"{g.name}: local score with each vertex fixed")
+        kw.setdefault("up", guess_up(g))
+        return render_png(path, g.vertices, g.faces, hm.values, landmarks=[int(v) for v in g.to_internal(self.landmarks)],
+                          colorbar_label="sigma_inf with the vertex fixed", fig=fig, **kw)
+
+
+@dataclass(frozen=True, repr=False)
+class KappaResult(ProbeResult):
+    """Probes of the condition number κ (paper Eq. 4) on the shape's samples, with σ ≤ κ ≤ 2σ + 1.
+
+    Attributes beyond ``ProbeResult``'s: ``shape`` (the MetricShape probed), ``landmark_ids``
+    (input ids fixed), ``trials`` (probes asked for).
+    """
+
+    shape: object = field(default=None, repr=False, compare=False)
+    landmark_ids: tuple = ()
+    trials: int = 0
+
+    def __repr__(self) -> str:
+        lo, hi = self.kappa
+        return (f"KappaResult(sigma={fmt(self.sigma)}, kappa=[{fmt(lo)}, {fmt(hi)}], {len(self.ratios)} probes, "
+                f"max {fmt(self.kappa_probe_max)})")
+
+    def to_dict(self) -> dict:
+        """The JSON object of ``shapecond kappa --json``."""
+        return jsonable({"n_points": self.shape.n_points, "landmarks": list(self.landmark_ids),
+                         "samples": self.shape.sample_ids, "trials": self.trials, **super().to_dict()})
+
+
+@dataclass(frozen=True, eq=False)
+class HeatMapResult(Pictures):
+    """σ (or δ(ε)) with each sample fixed as a landmark (paper Figures 1 and 4), in the input's ids.
+
+    Attributes
+    ----------
+    samples : (N,) input ids of the samples; ``values[i]`` is the score with ``samples[i]``
+        fixed (NaN for the landmarks already fixed).
+    sigma_before : the score with only ``landmarks`` fixed.
+    best, best_value : the best next landmark and the score with it fixed.
+    landmarks : the landmarks already fixed (input ids).
+    score : "sigma" (σ, Eq. 5) or "scale" (δ(ε)).
+    epsilon : the distortion level ε of δ (None for σ).
+    """
+
+    samples: np.ndarray
+    values: np.ndarray
+    sigma_before: float
+    best: int
+    best_value: float
+    landmarks: tuple
+    seconds: float
+    shape: object = field(repr=False)
+    score: str = "sigma"
+    epsilon: float | None = None
+
+    def to_dict(self) -> dict:
+        """The JSON object of ``shapecond heatmap --json``."""
+        return jsonable({"landmarks": list(self.landmarks), "score": self.score, "epsilon": self.epsilon,
+                         "sigma_before": self.sigma_before, "samples": self.samples,
+                         "values": [None if np.isnan(v) else float(v) for v in self.values],
+                         "best": self.best, "best_value": self.best_value, "seconds": self.seconds})
+
+    def __repr__(self) -> str:
+        return (f"HeatMapResult(N={self.samples.size}, sigma_before={self.sigma_before:.4g}, best={self.best}, "
+                f"best_value={self.best_value:.4g}, landmarks={list(self.landmarks)})")
+
+    def plot_values(self) -> np.ndarray:
+        """The values drawn: landmarks at ``sigma_before``, non-finite ones at the largest finite value."""
+        vals = np.where(np.isnan(self.values), self.sigma_before, self.values)
+        vals = np.where(np.isfinite(vals), vals, np.nan)
+        return np.where(np.isnan(vals), np.nanmax(vals) if np.any(np.isfinite(vals)) else 1.0, vals)
+
+    def title(self) -> str:
+        """One line: the score before and the best landmark."""
+        name = "delta" if self.score == "scale" else "sigma"
+        return (f"{name} with each point fixed (before: {fmt(self.sigma_before)}; best: {fmt(self.best_value)} "
+                f"at vertex {self.best})")
+
+    def plot(self, fig=None, path=None, **kw):
+        """The heat map drawn on the shape; onto ``fig`` (or a new Figure) or written to ``path``
+        (``ply=FILE``: also a coloured PLY)."""
+        from ..viz.heatmap import render_heatmap_png
+
+        kw.setdefault("title", self.title())
+        return render_heatmap_png(self.shape, self.plot_values(), path, landmarks=list(range(len(self.landmarks))),
+                                  fig=fig, **kw)
+
+
+@dataclass(frozen=True, eq=False)
+class MatchResult(Pictures):
+    """A dense map source -> target in input ids (``map[i]`` = target id of source id i, -1: dropped).
+
+    Attributes
+    ----------
+    map : (n,) int64 target id of every source id.
+    summary : the JSON summary of ``shapecond match`` (matcher, counts, options).
+    drawing : (source Geometry, target Geometry, their landmarks as internal ids), for pictures.
+    """
+
+    map: np.ndarray
+    summary: dict
+    drawing: tuple = field(default=None, repr=False)
+
+    def to_dict(self) -> dict:
+        """The summary of ``shapecond match --json`` plus the map itself."""
+        return jsonable({**self.summary, "map": self.map})
+
+    def to_html(self, path, truth=None, **kw) -> str:
+        """Write the map as a self-contained HTML page (colour transfer, linked landmarks and, with
+        ``truth`` (target id per source id, or "same-ids"), the error field); returns the path."""
+        return super().to_html(path, truth=truth, **kw)
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (f"MatchResult({s.get('matcher')}, {self.map.size} source ids -> target ids, "
+                f"{s.get('n_landmarks')} landmarks, N={s.get('n_points')})")
+
+
+__all__ = ["HeatMapResult", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult", "ScoreResult", "promote"]

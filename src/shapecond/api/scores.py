@@ -1,0 +1,240 @@
+"""How hard a shape is to match: the scores of the Python interface, guarded and validated.
+
+``score`` (σ bracket, Eq. 5; κ bracket, Theorem 4.1; δ(ε); verdict),
+``local_score`` (σ_∞, Section 5), ``landmarks`` (CNBS and the baselines,
+Section 6), ``heatmap`` (Figures 1 and 4) and ``kappa`` (probes of Eq. 4).
+Each takes any input of ``load`` (or a ``MetricShape``), refuses an unknown
+keyword and work beyond ``shapecond.limits`` before starting (``force=True``
+runs it), and returns a result with pictures (``api.results``).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from ..checks import check_float, check_int, parse_ids
+from ..errors import InputError
+from .guards import guard_heat_map, guard_landmarks
+from .inputs import load, require_mesh, shape_of
+from .options import EFFORTS, ShapeOptions, check_choice, refuse_unknown
+from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
+
+#: Largest N of κ probes beyond the landmarks (exact matching enumerates every map).
+DEFAULT_KAPPA_POINTS = 8
+
+
+def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: bool = False,
+          time_limit: float | None = 10.0, effort: str = "default", epsilon: float | None = None,
+          **options) -> ScoreResult:
+    """How hard ``x`` is to match: the σ bracket (paper Eq. 5), κ bracket, witness, δ(ε) and verdict.
+
+    Parameters
+    ----------
+    x : any input of ``load``, or a ``MetricShape``.
+    n_points, landmarks : samples N and fixed landmarks (input ids); see ``metric_shape``.
+    exact : "auto" (exact σ when enumeration is quick), True or False.
+    upper : LP upper bound when σ is not exact (N <= 16 free samples).
+    time_limit : seconds for each of the exact and LP solves.
+    effort : "quick", "default" or "thorough" work of the witness search.
+    epsilon : distortion level of the scale-aware score δ(ε) (default: the median sample spacing).
+    **options : the options of ``metric_shape`` (``seed``, ``force``, ``backend``, ...).
+
+    Returns
+    -------
+    ScoreResult: ``.sigma``, ``.kappa``, ``.verdict``, ``.score`` (SymmetryScore),
+    ``.scale`` (ScaleScore, δ(ε)), ``.witness_ids``, ``.to_dict()`` (the JSON of
+    ``shapecond score --json``), ``.plot()``, ``.to_html()``.
+
+    Examples
+    --------
+    >>> import shapecond as sc
+    >>> result = sc.score("demo:sphere:subdivisions=2", n_points=20, cache=False)
+    >>> result.sigma
+    (inf, inf)
+    >>> result.verdict.startswith("exact symmetry")
+    True
+    """
+    from ..symmetry.report import score_report
+    from ..symmetry.score import check_exact
+
+    opts, _ = ShapeOptions.take(options, "score")
+    check_exact(exact)
+    settings = _score_settings(upper, time_limit, effort, epsilon)
+    shape = shape_of(x, n_points, landmarks, opts)
+    report = score_report(shape, parse_ids(landmarks), exact=exact, seed=opts.seed, force=opts.force, **settings)
+    return promote(report, ScoreResult)
+
+
+def _score_settings(upper, time_limit, effort, epsilon) -> dict:
+    from ..checks import check_flag
+
+    return dict(upper=check_flag(upper, "upper"), effort=check_choice(effort, "effort", EFFORTS),
+                time_limit=None if time_limit is None else check_float(time_limit, "time_limit", lo=0.0, lo_open=True),
+                epsilon=None if epsilon is None else check_float(epsilon, "epsilon", lo=0.0))
+
+
+def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs", zero_tol: float | None = None,
+                force: bool = False) -> LocalResult:
+    """Local symmetry score σ_∞ = sqrt(2/λ_min) of deformation-based matching (paper Section 5).
+
+    ``x`` must be a triangle mesh; ``landmarks`` are vertex ids of the input.
+    Returns a ``LocalResult`` (``.score``, ``.lambda_min``, ``.zero_modes``, ``.doubt()``, ``.plot()``).
+
+    Examples
+    --------
+    >>> import shapecond as sc
+    >>> sc.local_score("demo:sphere:subdivisions=2").score   # the sphere's rotations are zero modes
+    inf
+    """
+    from dataclasses import replace
+
+    from ..deformation.local_score import ZERO_TOL, LocalProblem
+
+    t0 = time.perf_counter()
+    g = require_mesh(load(x, force=force))
+    zero_tol = ZERO_TOL if zero_tol is None else zero_tol
+    problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
+    result = problem.score(g.to_internal(parse_ids(landmarks)), zero_tol=zero_tol, ids=g.ids)
+    result = replace(result, seconds=time.perf_counter() - t0)  # building and factorising the Hessian included
+    return promote(result, LocalResult, drawing=(g, problem, zero_tol))
+
+
+def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, user_landmarks=None,
+              scores: bool | None = None, effort: str = "default", **options) -> LandmarkResult:
+    """``k`` landmarks chosen by ``method``, with the score after each (paper Section 6).
+
+    Parameters
+    ----------
+    x : any input of ``load``, or a ``MetricShape``.
+    k : how many landmarks (``method="user"``: 0 takes all of ``user_landmarks``).
+    method : "cnbs" (the paper's condition-number-based sampling on σ), "cnbs-scale" (CNBS on
+        δ(ε)), "cnbs-local", "fps", "pls", "hks" or "user".
+    user_landmarks : input ids placed first among the samples; for ``method="user"``, the landmarks.
+    scores : also compute the score after each landmark (always for CNBS; one search each otherwise).
+    effort : work of the witness searches.
+    **options : the options of ``metric_shape`` (``seed``, ``force``, ``progress``...) and of the method
+        (``landmarks.method_options``: ``score``, ``epsilon``, ``resolve_fraction``...).
+
+    Returns
+    -------
+    LandmarkResult whose ``landmarks`` are input ids, with ``.scores``, ``.plot()``, ``.to_html()``.
+
+    Examples
+    --------
+    >>> import shapecond as sc
+    >>> result = sc.landmarks("demo:animal", 3, "fps", n_points=30, cache=False)
+    >>> len(result.landmarks), result.method
+    (3, 'fps')
+    """
+    from ..landmarks import check_method_options
+
+    opts, method_kw = ShapeOptions.take(options, "landmarks", others=set(options))
+    check_method_options(method, method_kw)  # a misspelt option is refused, naming the method's options
+    effort = check_choice(effort, "effort", EFFORTS)
+    ids = parse_ids(user_landmarks, "user_landmarks")
+    if method == "user":
+        if not ids:
+            raise InputError("method 'user' needs user_landmarks")
+        method_kw["ids"] = ids
+    k = check_int(k, "k", lo=0)
+    shape = shape_of(x, n_points, ids, opts)
+    guard_landmarks(shape, k, method, scores, opts.force)
+    if opts.progress and method in ("cnbs", "cnbs-scale"):
+        method_kw.setdefault("progress", _cnbs_progress(k))
+    return _select(shape, k, method, opts.seed, scores, effort, method_kw)
+
+
+def _select(shape, k, method, seed, scores, effort, method_kw) -> LandmarkResult:
+    from ..landmarks import select_landmarks
+
+    sel = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **method_kw)
+    return promote(sel, LandmarkResult)
+
+
+def _cnbs_progress(k: int):
+    """CNBS's progress callback: "landmark i/k: heat map done/total" on stderr."""
+    def show(step, done, total):
+        print(f"\rlandmark {step + 1}/{k}: heat map {done}/{total}", end="\n" if done == total else "",
+              file=sys.stderr, flush=True)
+
+    return show
+
+
+def heatmap(x, landmarks=(), n_points: int | None = None, *, effort: str = "default",
+            resolve_fraction: float | None = None, score: str = "sigma", epsilon: float | None = None,
+            **options) -> HeatMapResult:
+    """σ (or δ(ε), ``score="scale"``) with each sample fixed: where the next landmark helps most
+    (paper Figures 1 and 4).
+
+    ``landmarks`` (input ids) are fixed already; ``**options`` are those of ``metric_shape``.
+
+    Examples
+    --------
+    >>> import shapecond as sc
+    >>> hm = sc.heatmap("demo:animal:delta=0.1", n_points=30, target="samples", cache=False)
+    >>> hm.best in hm.samples
+    True
+    """
+    from .problem import SymmetryProblem
+
+    opts, _ = ShapeOptions.take(options, "heatmap")
+    problem = SymmetryProblem(x, n_points, landmarks=landmarks, effort=effort, **vars(opts))
+    return problem.heatmap(landmarks, resolve_fraction=resolve_fraction, score=score, epsilon=epsilon)
+
+
+def kappa(x, n_points: int | None = None, *, landmarks=(), trials: int = 20, scale: float = 0.05,
+          time_limit: float | None = None, **options) -> KappaResult:
+    """Empirical condition number (paper Eq. 4): perturbed copies matched exactly, σ <= κ <= 2σ + 1.
+
+    The samples are matched to samples and every map is enumerated, so at most
+    ``symmetry.condition.MAX_PROBE_POINTS`` samples may be free of landmarks; a mesh
+    is sampled with 8 points beside the landmarks unless ``n_points`` says otherwise.
+
+    Examples
+    --------
+    >>> import shapecond as sc
+    >>> r = sc.kappa("demo:animal:delta=0.1", trials=3, cache=False)
+    >>> r.kappa[0] <= r.kappa_probe_max <= r.kappa[1]
+    True
+    """
+    from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
+
+    opts, _ = ShapeOptions.take(options, "kappa")
+    if opts.target == "dense":
+        raise InputError("kappa probes match samples to samples: target='dense' does not apply")
+    ids = parse_ids(landmarks)
+    limit = MAX_PROBE_POINTS + len(ids)
+    if n_points is not None and check_int(n_points, "n_points", lo=3) > limit:
+        raise InputError(f"kappa probes enumerate every map: at most {limit} points with {len(ids)} landmarks, "
+                         f"got n_points={n_points}")
+    loaded = load(x, largest_component=opts.largest_component, symmetry_map=opts.symmetry_map, force=opts.force)
+    if n_points is None and not isinstance(loaded, np.ndarray):
+        n_points = min(DEFAULT_KAPPA_POINTS + len(ids), limit)
+    shape = shape_of(loaded, n_points, ids, ShapeOptions(**{**vars(opts), "target": "samples"}))
+    if shape.n_points > limit:
+        raise InputError(f"kappa probes enumerate every map: at most {limit} points with {len(ids)} landmarks, "
+                         f"the input has {shape.n_points}")
+    trials = check_int(trials, "trials", lo=1)
+    if time_limit is not None:
+        time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
+    bar = _bar(trials, "probes") if opts.progress else None
+    try:
+        res = kappa_probes(shape.D, trials=trials, seed=opts.seed, landmarks=list(range(len(ids))),
+                           scale=check_float(scale, "scale", lo=0.0, lo_open=True), time_limit=time_limit,
+                           force=opts.force, progress=None if bar is None else lambda done, total: bar.update(1))
+    finally:
+        if bar is not None:
+            bar.close()
+    return promote(res, KappaResult, shape=shape, landmark_ids=tuple(ids), trials=trials)
+
+
+def _bar(total: int, desc: str):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit=desc[:-1], leave=False)
+
+
+__all__ = ["heatmap", "kappa", "landmarks", "local_score", "score"]
