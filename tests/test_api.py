@@ -150,7 +150,7 @@ print(matplotlib.get_backend())
 
 
 def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
-    from tests.conftest import run_cli
+    from tests.helpers import run_cli
 
     path = tmp_path / "s.npz"
     code, _, err = run_cli(capsys, "sample", "demo:blob:subdivisions=2", "--points", "12", "-o", path)

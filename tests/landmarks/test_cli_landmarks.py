@@ -5,7 +5,7 @@ import json
 import matplotlib.image as mpimg
 import numpy as np
 
-from tests.conftest import run_cli as run
+from tests.helpers import run_cli as run
 
 
 def _matrix(tmp_path, n=12, seed=0):

@@ -13,7 +13,7 @@ from shapecond.symmetry.resolution import classify
 from shapecond.symmetry.score import symmetry_score
 from shapecond.symmetry.search import best_single_swap, witness_search
 
-from .conftest import mixed_instances, near_symmetric_instance, random_instance
+from tests.helpers import mixed_instances, near_symmetric_instance, random_instance
 
 
 def test_bracket_contains_exact_and_kappa_follows_theorem_4_1():

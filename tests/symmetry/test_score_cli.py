@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 from shapecond.cli import cli
 
-from .conftest import near_symmetric_instance
+from tests.helpers import near_symmetric_instance
 
 
 def run(*args):

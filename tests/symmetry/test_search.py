@@ -13,31 +13,8 @@ from shapecond.symmetry import objective as obj
 from shapecond.symmetry.search import best_single_swap, witness_search
 from shapecond.symmetry.starts import repair
 
-from .conftest import dense_instance, mixed_instances, near_symmetric_instance, random_instance
-
-
-def brute_sigma(D, n=None, landmarks=()):
-    """Exact σ by enumerating every injective map of the n samples into range(M)."""
-    m = D.shape[0]
-    n = m if n is None else n
-    lm = set(landmarks)
-    free = [x for x in range(n) if x not in lm]
-    targets = [y for y in range(m) if y not in lm]
-    perms = np.array(list(itertools.permutations(targets, len(free))), dtype=np.int64)
-    T = np.tile(np.arange(n), (len(perms), 1))
-    T[:, free] = perms
-    d2 = np.sum(D[np.arange(n), T] ** 2, axis=1)
-    dist2 = np.sum((D[:n, :n][None] - D[T[:, :, None], T[:, None, :]]) ** 2, axis=(1, 2))
-    iso = (dist2 <= obj.ISOMETRY_RTOL**2 * np.sum(D[:n, :n] ** 2)) & (d2 > 0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        r = np.where(d2 > 0, d2 / np.where(dist2 > 0, dist2, 1.0), 0.0)
-    r[iso] = np.inf
-    k = int(np.argmax(r))
-    return math.sqrt(r[k]), T[k]
-
-
-def same(a, b):
-    return a == b or abs(a - b) <= 1e-9 * max(1.0, abs(b))
+from tests.helpers import (brute_sigma, dense_instance, mixed_instances, near_symmetric_instance, random_instance,
+                           same)
 
 
 def test_n8_lower_bound_equals_enumeration_on_200_instances():

@@ -21,7 +21,7 @@ from shapecond.viz import pages
 from shapecond.viz.render import view_rotation
 from shapecond.viz.scene import heatmap_scene, make_scene
 
-from tests.conftest import run_cli
+from tests.helpers import run_cli
 
 SMALL = "demo:animal:resolution=0.05"
 
