@@ -23,11 +23,6 @@ def _readme_example() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
-def test_readme_example_is_three_lines_after_the_import():
-    lines = [ln for ln in _readme_example().splitlines() if ln.strip()]
-    assert lines[0] == "import shapecond as sc" and len(lines) == 4
-
-
 @pytest.mark.parametrize("form", ["path", "trimesh", "(V, F)"])
 def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(tmp_path, form):
     g = sc.load("demo:animal:delta=0.2,resolution=0.06")
