@@ -1,4 +1,4 @@
-"""`shapecond landmarks` and `shapecond heatmap` (issue 6 item 5)."""
+"""`shapecond landmarks` and `shapecond heatmap`."""
 
 import json
 

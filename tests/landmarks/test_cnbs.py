@@ -111,7 +111,8 @@ def test_argmin_tie_breaks_by_move_then_index():
 
 
 def test_animal_first_landmark_off_the_mirror_plane():
-    """Generated near-symmetric animal, N = 100 (issue 6 'done when')."""
+    """On the near-symmetric animal (N = 100) the first CNBS landmark is off the mirror plane: the
+    mirror fixes the samples on the plane, so fixing one of them lowers σ least."""
     from shapecond.shapes.metric import metric_shape
     from shapecond.shapes.synthetic import animal
 

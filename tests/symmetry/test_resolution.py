@@ -1,4 +1,4 @@
-"""Resolution report (issue 4 item 2) on small dense instances."""
+"""Resolution report on small dense instances."""
 
 from __future__ import annotations
 

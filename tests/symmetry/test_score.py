@@ -89,7 +89,8 @@ def _mirror_map(shape):
 
 @pytest.mark.parametrize("delta", [0.0, 0.02, 0.05])
 def test_animal_n100_mirror_is_the_witness(delta):
-    """Issue 3 done-when: inf at delta = 0 with the mirror as witness; mirror for delta <= 0.05."""
+    """The animal at N = 100: σ = inf at delta = 0 with the mirror as witness; the mirror is still the
+    witness for delta <= 0.05."""
     shape = _animal_shape(delta, 100)
     mirror = _mirror_map(shape)
     res = witness_search(shape.D, seed=0)

@@ -1,4 +1,4 @@
-"""HTML pages (issue 26): self-contained, deterministic, built from the PNGs' scenes, and working in a
+"""HTML pages: self-contained, deterministic, built from the PNGs' scenes, and working in a
 real headless Chromium with the network blocked (the browser tests skip when Chromium or Playwright is
 missing)."""
 
