@@ -16,6 +16,7 @@ Distance matrices (symmetric, zero diagonal, max 1; deterministic given a ``nump
     ``dense_instance(rng, n, m, dim, noise=None)``: ``m`` targets whose first ``n`` are the
     samples (near-symmetric when ``noise`` is given);
     ``mixed_instances(seed, count, n)``: a cycle over the kinds above;
+    ``mirror_pairs_instance(n, seed, noise)``: mirror pairs and points on the plane, perturbed;
     ``brute_sigma(D, n, landmarks)``: exact σ by enumeration; ``same(a, b)``: equal to 1e-9.
 Batch tables
     ``read_table(path)`` (Parquet, CSV or JSON Lines), ``stable(rows)`` (without the
@@ -142,6 +143,20 @@ def mixed_instances(seed: int, count: int, n: int):
         else:
             out.append(near_symmetric_instance(rng, n, dim, noises[(k // 4) % 3]))
     return out
+
+
+def mirror_pairs_instance(n: int, seed: int, noise: float = 0.03, dim: int = 3) -> np.ndarray:
+    """(n, n) distances (max 1) of points in mirror pairs (x_0 -> -x_0) plus a few on the mirror
+    plane, all perturbed by Gaussian noise of standard deviation ``noise``; seeded by ``seed``."""
+    rng = np.random.default_rng(seed)
+    half = rng.normal(size=((n - 2) // 2, dim))
+    half[:, 0] = np.abs(half[:, 0]) + 0.2
+    mirror = half * np.r_[-1.0, np.ones(dim - 1)]
+    plane = rng.normal(size=(n - 2 * half.shape[0], dim))
+    plane[:, 0] = 0.0
+    P = np.vstack([half, mirror, plane]) + noise * rng.normal(size=(n, dim))
+    D = np.linalg.norm(P[:, None] - P[None], axis=2)
+    return D / D.max()
 
 
 def brute_sigma(D, n=None, landmarks=()):
