@@ -73,6 +73,7 @@ def test_no_function_returns_a_number_for_an_invalid_matrix(bad):
         assert str(info.value) and "\n" not in str(info.value), name
 
 
+@pytest.mark.slow
 def test_every_function_takes_a_trimesh_a_tuple_and_a_mesh_with_an_unreferenced_vertex():
     g = sc.load("demo:sphere:subdivisions=2")
     V = np.vstack([[[9.0, 9.0, 9.0]], g.vertices])  # row 0 is referenced by no face
@@ -95,6 +96,7 @@ def test_every_function_takes_a_trimesh_a_tuple_and_a_mesh_with_an_unreferenced_
             sc.local_score(x, [0])
 
 
+@pytest.mark.slow
 def test_results_serialise_to_json_and_print_readably(tmp_path):
     shape = "demo:animal:delta=0.1,resolution=0.06"
     problem = sc.SymmetryProblem(shape, 20, cache=False)
@@ -158,6 +160,7 @@ def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
     assert code == 0 and json.loads(out)["n_points"] == 12
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scale", [1e-30, 1e20])
 def test_match_is_scale_free(scale):
     """The same dense map for a mesh pair and its copy scaled by 1e-30 or 1e20."""

@@ -130,6 +130,7 @@ def test_evaluate_quick_on_a_cluster_matches_the_local_run(tmp_path, dask_client
 
 # --- killed and resumed --------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_batch_killed_mid_run_resumes_to_the_same_table(tmp_path):
     from shapecond.shapes.synthetic import bumpy_blob
 

@@ -29,6 +29,7 @@ def test_null_shape_is_the_lowest_number(dataset):
     assert off_vertex_count(dataset / "strip" / "strip0.off") == 19 * 19
 
 
+@pytest.mark.slow
 def test_evaluation_of_an_isometric_class(dataset, tmp_path):
     ev = evaluate_dataset(dataset, methods=("fps",), matchers=("lh05", "faq"), n_points=60,
                           protocol="both")

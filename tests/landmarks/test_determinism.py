@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from shapecond.landmarks.cnbs import cnbs_landmarks
@@ -35,6 +36,7 @@ def _run(threads: str) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_cnbs_selections_are_identical_across_processes_and_thread_counts():
     """Two processes, one BLAS and numba thread and two (the heat map's candidates then run in two
     threads): the same landmarks and the same scores to the bit (the evaluation selects landmarks in

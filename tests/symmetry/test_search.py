@@ -17,6 +17,7 @@ from tests.helpers import (brute_sigma, dense_instance, mixed_instances, near_sy
                            same)
 
 
+@pytest.mark.slow
 def test_n8_lower_bound_equals_enumeration_on_200_instances():
     """At N = 8 the witness search finds the exact σ on at least 196 of 200 instances, never above it."""
     from shapecond.symmetry.exact import exact_sigma  # enumeration (the exact helper's oracle)

@@ -223,6 +223,7 @@ def test_browser_score_and_landmarks_pages(browser, tmp_path):
     assert page.locator(".sc-landmarks li").count() == 4 and "σ after" in page.locator(".sc-side").inner_text()
 
 
+@pytest.mark.slow
 def test_browser_match_page_with_errors(browser, tmp_path, capsys):
     out = tmp_path / "match.html"
     code, _, err = run_cli(capsys, "match", SMALL, "demo:animal:resolution=0.05,delta=0.1", "--landmarks-source",
