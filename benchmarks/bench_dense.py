@@ -1,7 +1,7 @@
 """Issue 4 on real data: dense targets, resolution report, symmetry-consistent sampling (TOSCA).
 
 Usage: python benchmarks/bench_dense.py DATASET_DIR [--stages timing,null,consistent,table,converge]
-       [--null cat0,dog0,horse0,victoria0] [--table-points 400] [--converge-sizes 100,200] [--remeasure]
+       [--null cat0,dog0,horse0,victoria0] [--timing-points 400] [--table-points 400] [--converge-sizes 100,200] [--remeasure]
 
 DATASET_DIR holds ``tosca_hires/<class>/<shape>.off`` and ``tosca_hires/symmetries/<class>.sym``.
 Every row is stored in ``benchmarks/out/bench_dense.json`` as soon as it is measured and the
@@ -34,8 +34,10 @@ Stages (issue 4, "Done when"):
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
 import shutil
 import sys
 import tempfile
@@ -47,6 +49,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, run_isolated, write_section  # noqa: E402
 
+from shapecond import cache  # noqa: E402
 from shapecond.shapes import metric as metric_mod  # noqa: E402
 from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
 from shapecond.shapes.metric import metric_shape  # noqa: E402
@@ -144,8 +147,28 @@ def mirror_targets(root, name, g, sh):
     return sh.nearest[mir]
 
 
+def metric_key(g, n, m) -> str:
+    """The cache key ``metric_shape`` gives a heat-geodesic build of N = n, M = m, seed 0, no landmarks."""
+    return cache.key_of(metric_mod.CACHE_VERSION, g.vertices, g.faces, g.ids, g.symmetry, n, m, "heat", 0, ())
+
+
 def cached(g, n, m) -> bool:
-    return metric_mod._cache_path(metric_mod._cache_key(g, n, m, "heat", 0, ())).exists()
+    """Whether the cache holds a valid distance matrix for this build (checked as ``metric_shape`` does)."""
+    return cache.load_arrays("metric", metric_key(g, n, m), {"D": (m, m)}) is not None
+
+
+@contextlib.contextmanager
+def cache_folder(folder):
+    """Point ``shapecond.cache`` at ``folder`` for the block (it reads $SHAPECOND_CACHE on every call)."""
+    saved = os.environ.get("SHAPECOND_CACHE")
+    os.environ["SHAPECOND_CACHE"] = str(folder)
+    try:
+        yield
+    finally:
+        if saved is None:
+            del os.environ["SHAPECOND_CACHE"]
+        else:
+            os.environ["SHAPECOND_CACHE"] = saved
 
 
 # ---------------------------------------------------------------- stages
@@ -183,17 +206,22 @@ def build_isolated(root, name, n, target, f):
     try:
         out, rss = run_isolated(BUILD.format(cache=tmp, path=str(mesh_path(root, name)), n=n, target=target, f=f))
         wall, cpu, m = out.split()[-3:]
-        dest = metric_mod.cache_dir()
-        dest.mkdir(parents=True, exist_ok=True)
+        # entries carry a checksum under their folder's own secret: a moved file would be refused, so
+        # each one is read from the temporary cache and written again into the default one
         for p in Path(tmp).glob("metric-*.npz"):
-            if not (dest / p.name).exists():
-                shutil.move(str(p), dest / p.name)
+            key = p.stem[len("metric-"):]
+            with cache_folder(tmp):
+                arrays = cache.load_arrays("metric", key, {})
+            if arrays is not None and cache.load_arrays("metric", key, {}) is None:
+                cache.save_arrays("metric", key, arrays)
         return float(wall), float(cpu), int(m), rss
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
 def stage_timing(root, store, names, redo, n=400, f=8):
+    """Rows of the ``timing`` stage at N = n, M = f n (the store keeps one row per shape: a run at
+    another N replaces it)."""
     rows = store.setdefault("timing", {})
     for name in names:
         if "score_s" in rows.get(name, {}) and not redo:
@@ -493,6 +521,7 @@ def main():
     ap.add_argument("dataset", type=Path)
     ap.add_argument("--stages", default="timing,null,consistent,table,converge")
     ap.add_argument("--null", default=",".join(NULL))
+    ap.add_argument("--timing-points", type=int, default=400)
     ap.add_argument("--null-sizes", default="400,100")
     ap.add_argument("--table-points", type=int, default=400)
     ap.add_argument("--table-shapes", default="")
@@ -505,7 +534,7 @@ def main():
     null = [s for s in a.null.split(",") if s]
     for stage in a.stages.split(","):
         if stage == "timing":
-            stage_timing(root, store, null, redo)
+            stage_timing(root, store, null, redo, n=a.timing_points)
         elif stage == "null":
             stage_dense(root, store, "null", null, [int(v) for v in a.null_sizes.split(",")], redo)
         elif stage == "consistent":

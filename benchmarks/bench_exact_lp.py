@@ -32,8 +32,7 @@ from _results import command_line, machine, peak_rss_mb, write_section  # noqa: 
 
 from shapecond.symmetry.exact import exact_sigma  # noqa: E402
 from shapecond.symmetry.relax import lp_upper_bound  # noqa: E402
-from tests.symmetry.conftest import (dense_instance, mixed_instances,  # noqa: E402
-                                     near_symmetric_instance, random_instance)
+from tests.helpers import dense_instance, mixed_instances, near_symmetric_instance, random_instance  # noqa: E402
 
 
 def fmt(v, d=3):

@@ -23,11 +23,6 @@ def _readme_example() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
-def test_readme_example_is_three_lines_after_the_import():
-    lines = [ln for ln in _readme_example().splitlines() if ln.strip()]
-    assert lines[0] == "import shapecond as sc" and len(lines) == 4
-
-
 @pytest.mark.parametrize("form", ["path", "trimesh", "(V, F)"])
 def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(tmp_path, form):
     g = sc.load("demo:animal:delta=0.2,resolution=0.06")
@@ -78,6 +73,7 @@ def test_no_function_returns_a_number_for_an_invalid_matrix(bad):
         assert str(info.value) and "\n" not in str(info.value), name
 
 
+@pytest.mark.slow
 def test_every_function_takes_a_trimesh_a_tuple_and_a_mesh_with_an_unreferenced_vertex():
     g = sc.load("demo:sphere:subdivisions=2")
     V = np.vstack([[[9.0, 9.0, 9.0]], g.vertices])  # row 0 is referenced by no face
@@ -100,6 +96,7 @@ def test_every_function_takes_a_trimesh_a_tuple_and_a_mesh_with_an_unreferenced_
             sc.local_score(x, [0])
 
 
+@pytest.mark.slow
 def test_results_serialise_to_json_and_print_readably(tmp_path):
     shape = "demo:animal:delta=0.1,resolution=0.06"
     problem = sc.SymmetryProblem(shape, 20, cache=False)
@@ -150,7 +147,7 @@ print(matplotlib.get_backend())
 
 
 def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
-    from tests.conftest import run_cli
+    from tests.helpers import run_cli
 
     path = tmp_path / "s.npz"
     code, _, err = run_cli(capsys, "sample", "demo:blob:subdivisions=2", "--points", "12", "-o", path)
@@ -163,6 +160,7 @@ def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
     assert code == 0 and json.loads(out)["n_points"] == 12
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scale", [1e-30, 1e20])
 def test_match_is_scale_free(scale):
     """The same dense map for a mesh pair and its copy scaled by 1e-30 or 1e20."""

@@ -12,7 +12,7 @@ import pytest
 from shapecond import cache
 from shapecond.shapes.metric import metric_shape
 from shapecond.shapes.synthetic import generate
-from tests.conftest import deadline, run_cli
+from tests.helpers import deadline, run_cli
 
 
 @pytest.fixture

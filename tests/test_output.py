@@ -17,7 +17,7 @@ import pytest
 import shapecond.output as output
 from shapecond.errors import OutputError
 from shapecond.output import atomic_open, write_bytes
-from tests.conftest import run_cli
+from tests.helpers import run_cli
 
 GOOD = "demo:sphere:subdivisions=2"
 

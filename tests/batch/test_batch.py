@@ -15,29 +15,7 @@ from shapecond.batch.run import run_batch
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
 
-from tests.conftest import run_cli
-
-#: columns that depend on where and when a row was computed, not on the shape
-VOLATILE = ("seconds", "cpu_seconds", "peak_memory_mib", "worker")
-
-
-def stable(rows):
-    """Rows without the volatile columns, sorted by file (for comparing runs)."""
-    return sorted(({k: v for k, v in r.items() if k not in VOLATILE} for r in rows), key=lambda r: r["file"])
-
-
-def read_table(path):
-    path = Path(path)
-    if path.suffix == ".parquet":
-        import pyarrow.parquet as pq
-
-        return [schema.coerce_row(r) for r in pq.read_table(path).to_pylist()]
-    if path.suffix == ".csv":
-        import csv
-
-        return [schema.coerce_row(r) for r in csv.DictReader(path.read_text().splitlines())]
-    return [schema.coerce_row(json.loads(line)) for line in path.read_text().splitlines()]
-
+from tests.helpers import read_table, run_cli, table_row
 
 # --- inputs ------------------------------------------------------------------------------
 
@@ -139,17 +117,10 @@ def test_an_unreadable_file_is_an_error_row(shape_dir, tmp_path):
 
 # --- the table ---------------------------------------------------------------------------
 
-def _row(i, **kw):
-    row = schema.empty_row()
-    row.update(file=f"/s/{i}.off", content_hash=f"h{i}", params="{}", sigma_lower=math.inf, sigma_hat=1.5 * i,
-               landmarks=[i, 7], landmark_scores=[math.inf, 0.25], vertices=10 + i, problems="a; b", **kw)
-    return row
-
-
 @pytest.mark.parametrize("suffix", [".parquet", ".csv", ".jsonl"])
 def test_rows_survive_a_round_trip_and_one_writer_at_a_time(tmp_path, suffix):
     path = tmp_path / f"t{suffix}"
-    rows = [_row(1), _row(2, error="boom")]
+    rows = [table_row(1), table_row(2, error="boom")]
     with Table(path) as table:
         for r in rows:
             table.append(r)
@@ -173,22 +144,22 @@ def test_rows_survive_a_round_trip_and_one_writer_at_a_time(tmp_path, suffix):
 def test_a_torn_last_line_is_cut(tmp_path, suffix):
     path = tmp_path / f"t{suffix}"
     with Table(path) as table:
-        table.append(_row(1))
+        table.append(table_row(1))
     with open(path, "a") as fh:
         fh.write('"/s/2.off",h2,{' if suffix == ".csv" else '{"file": "/s/2.off", "content_')  # died mid-line
     with pytest.warns(UserWarning, match="cut its incomplete last line"), Table(path, "resume") as table:
         assert [r["file"] for r in table.rows] == ["/s/1.off"]
-        table.append(_row(3))
+        table.append(table_row(3))
     assert [r["file"] for r in read_table(path)] == ["/s/1.off", "/s/3.off"]
 
 
 def test_a_parquet_journal_left_by_a_killed_batch_is_folded_in(tmp_path):
     path = tmp_path / "t.parquet"
     with Table(path) as table:
-        table.append(_row(1))
+        table.append(table_row(1))
     journal = tmp_path / ".t.parquet.journal"
     with open(journal, "w") as fh:  # row 1 again (killed between rewrite and journal reset) and row 2
-        for r in (_row(1), _row(2)):
+        for r in (table_row(1), table_row(2)):
             fh.write(json.dumps({k: r[k] for k in schema.NAMES}).replace("Infinity", '"inf"') + "\n")
     with Table(path, "resume") as table:
         assert [r["file"] for r in table.rows] == ["/s/1.off", "/s/2.off"]

@@ -16,9 +16,7 @@ from shapecond.batch import schema
 from shapecond.batch.run import run_batch
 from shapecond.errors import InputError
 from shapecond.shapes.io import write_mesh
-from tests.batch.test_batch import VOLATILE, read_table, stable
-from tests.conftest import run_cli
-from tests.evaluation.test_evaluation import dataset  # noqa: F401 - the class-folder fixture
+from tests.helpers import VOLATILE, read_table, run_cli, stable, write_strip_class
 
 
 def same_rows(a, b):
@@ -110,7 +108,8 @@ def test_batch_starts_and_stops_its_own_local_cluster(shape_dir, tmp_path, capsy
     same_rows(read_table(tmp_path / "u.jsonl"), read_table(tmp_path / "t.jsonl"))
 
 
-def test_evaluate_quick_on_a_cluster_matches_the_local_run(dataset, tmp_path, dask_client, capsys):  # noqa: F811
+def test_evaluate_quick_on_a_cluster_matches_the_local_run(tmp_path, dask_client, capsys):
+    dataset = write_strip_class(tmp_path / "data")
     common = ["evaluate", dataset, "--quick", "--points", "30", "--methods", "fps", "--matchers", "faq", "--json"]
     status, _, err = run_cli(capsys, *common, "--out", tmp_path / "local")
     assert status == 0, err
@@ -131,6 +130,7 @@ def test_evaluate_quick_on_a_cluster_matches_the_local_run(dataset, tmp_path, da
 
 # --- killed and resumed --------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_batch_killed_mid_run_resumes_to_the_same_table(tmp_path):
     from shapecond.shapes.synthetic import bumpy_blob
 

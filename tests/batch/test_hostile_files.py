@@ -15,8 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.batch.test_batch import read_table
-from tests.conftest import deadline, run_cli, run_shapecond
+from tests.helpers import deadline, read_table, run_cli, run_shapecond, table_row
 
 GOOD = "demo:sphere:subdivisions=1"
 
@@ -201,11 +200,10 @@ def test_a_read_only_folder_is_one_error_line(tmp_path, suffix):
 def test_a_refused_batch_leaves_even_its_own_tables_torn_line(tmp_path, capsys, suffix):
     """The torn last line of the batch's own table is cut only by a batch that goes on to write."""
     from shapecond.batch.table import Table
-    from tests.batch.test_batch import _row
 
     path = tmp_path / f"t{suffix}"
     with Table(path) as table:
-        table.append(_row(1))
+        table.append(table_row(1))
     with open(path, "a") as fh:
         fh.write('"/s/2.off",h2,{' if suffix == ".csv" else '{"file": "/s/2.off", "content_')
     refused(capsys, tmp_path, path, needle="already holds 1 rows")
@@ -217,12 +215,11 @@ def test_json_lines_rows_are_recognised_by_their_columns_whatever_their_order(tm
 
     from shapecond.batch import schema
     from shapecond.batch.table import Table
-    from tests.batch.test_batch import _row
 
     path = tmp_path / "t.jsonl"
-    row = {k: _row(1)[k] for k in schema.NAMES}
+    row = {k: table_row(1)[k] for k in schema.NAMES}
     path.write_text(json.dumps(row, sort_keys=True).replace("Infinity", '"inf"') + "\n")
     with Table(path, "resume") as table:
         assert [r["file"] for r in table.rows] == ["/s/1.off"]
-        table.append(_row(2))
+        table.append(table_row(2))
     assert [r["file"] for r in read_table(path)] == ["/s/1.off", "/s/2.off"]

@@ -15,21 +15,8 @@ import stat
 import pytest
 
 from shapecond.errors import InputError
-from tests.conftest import deadline, run_cli
-
-
-def _table():
-    """The table module beside this file (imported by path: it is also a stand-alone tool)."""
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.spec_from_file_location("bad_inputs", Path(__file__).with_name("bad_inputs.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-api_cases, cli_cases, time_limit = _table().api_cases, _table().cli_cases, _table().time_limit
+from tests.cli.bad_inputs import api_cases, cli_cases, make_files, time_limit
+from tests.helpers import deadline, run_cli
 
 
 def files_state(folder) -> dict:
@@ -110,7 +97,7 @@ def test_messages_name_the_value_and_what_is_allowed(capsys, argv, needle):
 def test_binary_content_is_named_not_quoted(tmp_path, capsys, monkeypatch):
     """evaluate's vertex-count probe quoted the first 'word' of a binary file: '\\x00ÿ\\x00ÿ...'."""
     monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path / "cache"))
-    f = _table().make_files(tmp_path)
+    f = make_files(tmp_path)
     for argv in (["evaluate", f["dataset_binary"], "--out", tmp_path / "out", "--no-cache"],
                  ["score", f["off_binary.off"], "--no-cache"]):
         code, _, err = run_cli(capsys, *argv)

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.conftest import run_cli as run
+from tests.helpers import run_cli as run
 
 
 def test_info_json_on_generated_shape(capsys):

@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 
-from tests.conftest import run_cli as run
+from tests.helpers import run_cli as run
 
 
 def test_local_json_keys_and_inf(capsys):

@@ -1,4 +1,4 @@
-"""Energy and its exact Hessian at P = 0 (deformation/energy.py, DESIGN.md 3)."""
+"""The deformation energy and its exact Hessian at P = 0 (against finite differences)."""
 
 import numpy as np
 import pytest

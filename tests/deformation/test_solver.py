@@ -9,8 +9,7 @@ import scipy.sparse.linalg as sla
 
 from shapecond.deformation.energy import hessian, mass_diagonal, normalized_mesh
 from shapecond.deformation.local_score import LocalProblem
-from shapecond.deformation.solver import (BACKENDS, ShiftInvertSolver, default_backend,
-                                          nested_dissection, vertex_graph)
+from shapecond.deformation.solver import BACKENDS, ShiftInvertSolver, nested_dissection, vertex_graph
 from shapecond.errors import InputError
 from shapecond.shapes.synthetic import bumpy_blob, sphere
 
@@ -67,12 +66,17 @@ def test_block_solve_equals_column_solves():
     assert np.allclose(X, np.column_stack([S.solve(B[:, k]) for k in range(5)]), rtol=1e-10, atol=1e-12)
 
 
-def test_default_backend_and_unknown_backend():
-    assert default_backend() == "cholmod"
+def test_cholmod_is_used_unless_another_backend_is_asked_for():
+    """Without ``backend=`` the solver and the local score factorise with CHOLMOD (the faster
+    backend) when A is positive definite; an unknown backend is one InputError."""
     g = bumpy_blob(1)
     V, F, _, _ = normalized_mesh(g.vertices, g.faces)
-    with pytest.raises(InputError):
-        ShiftInvertSolver(hessian(V, F), mass_diagonal(V, F), V, backend="umfpack")
+    H, m = hessian(V, F), mass_diagonal(V, F)
+    assert ShiftInvertSolver(H, m, V).backend == "cholmod"
+    assert ShiftInvertSolver(H, m, V, backend="superlu").backend == "superlu"
+    assert LocalProblem(g.vertices, g.faces).solver.backend == "cholmod"
+    with pytest.raises(InputError, match="umfpack"):
+        ShiftInvertSolver(H, m, V, backend="umfpack")
 
 
 def test_not_positive_definite_falls_back_to_superlu():

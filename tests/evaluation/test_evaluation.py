@@ -14,28 +14,13 @@ from shapecond.evaluation.landmark_sets import ShapeSetup, landmark_task
 from shapecond.evaluation.report import correlation, markdown, write_report
 from shapecond.shapes.synthetic import plane_patch
 
-
-def _write_off(path, V, F):
-    path.write_text(f"OFF\n{len(V)} {len(F)} 0\n" + "\n".join(" ".join(map(str, v)) for v in V) + "\n"
-                    + "\n".join(f"3 {a} {b} {c}" for a, b, c in F) + "\n")
-
-
-def _bent(V, radius):
-    th = V[:, 0] / radius
-    return np.column_stack([radius * np.sin(th), V[:, 1], radius * (1 - np.cos(th))])
+from tests.helpers import write_off, write_strip_class
 
 
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory):
     """One class 'strip': a flat 1 x 0.55 grid (strip0) and two bent copies, same vertex order."""
-    root = tmp_path_factory.mktemp("data")
-    (root / "strip").mkdir()
-    g = plane_patch(n=19)
-    V = g.vertices * [1.0, 0.55, 0.0]
-    _write_off(root / "strip" / "strip0.off", V, g.faces)
-    _write_off(root / "strip" / "strip7.off", _bent(V, 0.5), g.faces)
-    _write_off(root / "strip" / "strip12.off", _bent(V, 0.3) + [1.0, 2.0, 3.0], g.faces)
-    return root
+    return write_strip_class(tmp_path_factory.mktemp("data"))
 
 
 def test_null_shape_is_the_lowest_number(dataset):
@@ -44,6 +29,7 @@ def test_null_shape_is_the_lowest_number(dataset):
     assert off_vertex_count(dataset / "strip" / "strip0.off") == 19 * 19
 
 
+@pytest.mark.slow
 def test_evaluation_of_an_isometric_class(dataset, tmp_path):
     ev = evaluate_dataset(dataset, methods=("fps",), matchers=("lh05", "faq"), n_points=60,
                           protocol="both")
@@ -80,7 +66,7 @@ def test_class_with_different_vertex_counts_is_refused(dataset, tmp_path):
     for name in ("odd0.off", "odd1.off"):
         (tmp_path / "odd" / name).write_bytes((dataset / "strip" / "strip0.off").read_bytes())
     g = plane_patch(n=9)
-    _write_off(tmp_path / "odd" / "odd2.off", g.vertices, g.faces)
+    write_off(tmp_path / "odd" / "odd2.off", g.vertices, g.faces)
     with pytest.raises(InputError, match="different vertex counts"):
         evaluate_dataset(tmp_path, methods=("fps",), n_points=20)
 
@@ -92,7 +78,7 @@ def test_class_with_a_different_vertex_order_is_refused(dataset, tmp_path, capsy
     g = plane_patch(n=19)
     V = g.vertices * [1.0, 0.55, 0.0]
     F = g.faces[~np.any(g.faces == 0, axis=1)]  # vertex 0 unreferenced
-    _write_off(tmp_path / "odd" / "odd1.off", V, F)
+    write_off(tmp_path / "odd" / "odd1.off", V, F)
     with pytest.raises(SystemExit) as ex:
         main(["evaluate", str(tmp_path), "--methods", "fps", "--matchers", "faq", "--points", "20",
               "--out", str(tmp_path / "rep")])

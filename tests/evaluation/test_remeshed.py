@@ -57,6 +57,7 @@ def test_a_corres_folder_makes_a_remeshed_class(remeshed):
     assert find_classes(remeshed / "strip")["strip"].layout == "remeshed"  # one class given directly
 
 
+@pytest.mark.slow
 def test_dense_maps_between_differently_meshed_strips_err_below_a_vertex_spacing(remeshed):
     ev = evaluate_dataset(remeshed, methods=("fps",), matchers=("lh05", "zoomout"), n_points=60, cache=False)
     assert ev.settings["protocols"] == ["remeshed"]

@@ -20,7 +20,20 @@ def _dist(P):
 
 @pytest.fixture(scope="module")
 def animal_shape():
-    return metric_shape(animal(delta=0.05), n_points=60, cache=False)
+    """The generated animal, coarse (about 1.8k vertices), 60 samples."""
+    return metric_shape(animal(delta=0.05, resolution=0.06), n_points=60, cache=False)
+
+
+def _star(seed=0):
+    """Points along three arms of lengths 1, 0.8, 0.6 from the origin of the plane, slightly noisy:
+    (distance matrix, indices of the three arm tips)."""
+    pts, tips = [[0.0, 0.0]], []
+    for angle, length in zip((0.0, 2.1, 4.2), (1.0, 0.8, 0.6)):
+        for s in np.linspace(0.05, length, int(round(length / 0.05))):
+            pts.append([s * np.cos(angle), s * np.sin(angle)])
+        tips.append(len(pts) - 1)
+    P = np.array(pts) + 0.005 * np.random.default_rng(seed).normal(size=(len(pts), 2))
+    return _dist(P), tips
 
 
 def test_fps_brute_force():
@@ -37,6 +50,32 @@ def test_fps_brute_force():
     assert fps_landmarks(D, 30, 1, fixed=[4]) == [int(np.argmax(D[4]))]
     with pytest.raises(InputError):
         fps_landmarks(D, 30, 31)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_fps_landmarks_cover_the_samples_within_their_spacing(seed):
+    """Farthest point sampling's covering property: after k landmarks every sample lies within r_k
+    of one of them, and no two landmarks are closer than r_k, so r_k is at most twice the best
+    covering radius any k samples achieve (checked against all k-subsets)."""
+    import itertools
+
+    rng = np.random.default_rng(seed)
+    D = _dist(rng.normal(size=(14, 3)))
+    for k in (2, 3, 4):
+        got = fps_landmarks(D, 14, k, seed=seed)
+        assert len(set(got)) == k
+        radius = D[got].min(axis=0).max()
+        spacing = min(D[a, b] for a, b in itertools.combinations(got, 2))
+        assert spacing >= radius - 1e-12
+        best = min(D[list(c)].min(axis=0).max() for c in itertools.combinations(range(14), k))
+        assert radius <= 2 * best + 1e-12
+    # landmarks added to fixed ones keep the property with the fixed ones counted
+    fixed = [3, 9]
+    got = fps_landmarks(D, 14, 3, fixed=fixed)
+    assert not set(got) & set(fixed)
+    everything = fixed + got
+    radius = D[everything].min(axis=0).max()
+    assert min(D[a, b] for a in got for b in everything if a != b) >= radius - 1e-12
 
 
 def test_pls_descriptor_and_entropy():
@@ -76,20 +115,32 @@ def test_hks_closed_form_and_local_maxima():
 
 
 def test_hks_landmarks_on_extremities(animal_shape):
+    """On a mesh the six HKS maxima are the animal's extremities: its four feet, head and tail."""
     shape = animal_shape
-    got, n_peaks = hks_landmarks(shape, 4)
-    assert len(set(got)) == 4 and n_peaks >= 1
+    got, n_peaks = hks_landmarks(shape, 6)
+    assert n_peaks == 6 and len(set(got)) == 6
     V = shape.geometry.vertices
-    centre = V.mean(axis=0)
-    r = np.linalg.norm(V[shape.samples[:60]] - centre, axis=1)
-    # HKS maxima sit on protrusions: farther from the centre than the median sample
-    assert np.all(r[got[:n_peaks]] > np.median(r))
+    low = V[:, 1] < np.quantile(V[:, 1], 0.1)
+    feet = [np.flatnonzero(low & (np.sign(V[:, 0]) == sx) & (np.sign(V[:, 2]) == sz))
+            for sx in (-1, 1) for sz in (-1, 1)]
+    tips = [V[f[np.argmin(V[f, 1])]] for f in feet] + [V[np.argmin(V[:, 2])], V[np.argmax(V[:, 2])]]
+    nearest = [int(np.argmin(np.linalg.norm(np.array(tips) - V[shape.samples[i]], axis=1))) for i in got]
+    assert sorted(nearest) == list(range(6))
+    assert all(np.linalg.norm(tips[t] - V[shape.samples[i]]) < 0.2 for t, i in zip(nearest, got))
+    assert hks_landmarks(shape, 6) == (got, n_peaks)
 
 
-def test_hks_on_a_matrix_uses_a_graph_laplacian():
-    D = _dist(np.random.default_rng(2).normal(size=(40, 3)))
-    got, _ = hks_landmarks(from_distance_matrix(D), 5)
-    assert len(set(got)) == 5
+def test_hks_on_a_matrix_finds_the_arm_tips_whatever_the_sample_order():
+    """A distance matrix has no mesh: the heat kernel signature comes from a graph Laplacian on the
+    samples, and its maxima are the ends of a star's three arms, found again (same landmarks, same
+    order) when the samples are listed in another order, and on every call."""
+    D, tips = _star()
+    got, n_peaks = hks_landmarks(from_distance_matrix(D), 3)
+    assert n_peaks == 3 and sorted(got) == sorted(tips)
+    assert hks_landmarks(from_distance_matrix(D), 3) == (got, n_peaks)
+    perm = np.random.default_rng(1).permutation(len(D))
+    again, _ = hks_landmarks(from_distance_matrix(D[np.ix_(perm, perm)]), 3)
+    assert [int(perm[i]) for i in again] == got
 
 
 def test_user_landmarks_from_file(tmp_path, animal_shape):

@@ -1,11 +1,11 @@
-"""`shapecond landmarks` and `shapecond heatmap` (issue 6 item 5)."""
+"""`shapecond landmarks` and `shapecond heatmap`."""
 
 import json
 
 import matplotlib.image as mpimg
 import numpy as np
 
-from tests.conftest import run_cli as run
+from tests.helpers import run_cli as run
 
 
 def _matrix(tmp_path, n=12, seed=0):

@@ -10,22 +10,12 @@ from shapecond.landmarks.cnbs import (HeatMap, best_swap_avoiding, cnbs_landmark
 from shapecond.symmetry.exact import exact_sigma
 from shapecond.symmetry.objective import map_score
 
+from tests.helpers import mirror_pairs_instance
+
 
 def _dist(P):
     D = np.linalg.norm(P[:, None] - P[None], axis=2)
     return D / D.max()
-
-
-def near_symmetric(n, seed, noise=0.03, dim=3):
-    """Points in mirror pairs (x -> -x) plus a few on the plane, perturbed."""
-    rng = np.random.default_rng(seed)
-    half = rng.normal(size=((n - 2) // 2, dim))
-    half[:, 0] = np.abs(half[:, 0]) + 0.2
-    mirror = half * np.r_[-1.0, np.ones(dim - 1)]
-    plane = rng.normal(size=(n - 2 * half.shape[0], dim))
-    plane[:, 0] = 0.0
-    P = np.vstack([half, mirror, plane]) + noise * rng.normal(size=(n, dim))
-    return _dist(P)
 
 
 def test_swap_scores_match_map_score():
@@ -75,7 +65,7 @@ def test_repair_fixing_one_move():
 def test_heat_map_is_a_bracketed_lower_bound(prune):
     """Each value is a σ of a feasible map (<= exact σ with p fixed) and >= the swap floor."""
     for seed in range(6):
-        D = near_symmetric(7, seed)
+        D = mirror_pairs_instance(7, seed)
         hm = heat_map(D, 7, landmarks=[], seed=seed, prune=prune)
         S = swap_scores(D, 7)
         for p in range(7):
@@ -92,7 +82,7 @@ def test_heat_map_is_a_bracketed_lower_bound(prune):
 def test_greedy_choice_equals_exact_argmin(seed):
     """For 3 steps, the CNBS landmark has the smallest exact σ among the candidates."""
     n = 8
-    D = near_symmetric(n, 10 + seed, noise=0.05)
+    D = mirror_pairs_instance(n, 10 + seed, noise=0.05)
     out = cnbs_landmarks(D, n, 3, seed=0)
     L = []
     for c, score in zip(out["landmarks"], out["scores"]):
@@ -111,7 +101,8 @@ def test_argmin_tie_breaks_by_move_then_index():
 
 
 def test_animal_first_landmark_off_the_mirror_plane():
-    """Generated near-symmetric animal, N = 100 (issue 6 'done when')."""
+    """On the near-symmetric animal (N = 100) the first CNBS landmark is off the mirror plane: the
+    mirror fixes the samples on the plane, so fixing one of them lowers σ least."""
     from shapecond.shapes.metric import metric_shape
     from shapecond.shapes.synthetic import animal
 
@@ -135,7 +126,7 @@ def test_animal_first_landmark_off_the_mirror_plane():
 def test_pruned_heat_map_keeps_the_argmin(seed):
     """Pruning stops searches above the incumbent: same argmin, values still lower bounds."""
     n = 16
-    D = near_symmetric(n, 40 + seed, noise=0.04)
+    D = mirror_pairs_instance(n, 40 + seed, noise=0.04)
     full = heat_map(D, n, seed=0)
     cut = heat_map(D, n, seed=0, prune=True)
     c = cut.argmin()
@@ -154,7 +145,7 @@ def test_pruned_heat_map_keeps_the_argmin(seed):
 def test_pruned_heat_map_never_returns_a_pruned_argmin(max_verify):
     """Whatever the verification budget, the argmin is a fully evaluated candidate with a witness."""
     for seed in range(4):
-        D = near_symmetric(18, 60 + seed, noise=0.05)
+        D = mirror_pairs_instance(18, 60 + seed, noise=0.05)
         hm = heat_map(D, 18, seed=0, prune=True, max_verify=max_verify)
         c = hm.argmin()
         assert not hm.pruned[c] and c in hm.results
@@ -171,7 +162,7 @@ def test_heat_map_is_the_same_in_one_thread_and_in_two(budget):
 
     if numba.config.NUMBA_NUM_THREADS < 2:
         pytest.skip("numba has one thread on this machine")
-    D = near_symmetric(60, 4, noise=0.05)
+    D = mirror_pairs_instance(60, 4, noise=0.05)
     b = None if budget is None else budget_of(default_epsilon(D), 60, D)
     out = []
     before = numba.get_num_threads()

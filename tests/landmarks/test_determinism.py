@@ -5,20 +5,20 @@ import os
 import subprocess
 import sys
 
+import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from shapecond.landmarks.cnbs import cnbs_landmarks
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_cnbs import near_symmetric  # noqa: E402
+from tests.helpers import mirror_pairs_instance
 
 SCRIPT = """
 import json, sys
-sys.path.insert(0, {tests!r})
-from test_cnbs import near_symmetric
+sys.path.insert(0, {root!r})
+from tests.helpers import mirror_pairs_instance
 from shapecond.landmarks.cnbs import cnbs_landmarks
 from shapecond.symmetry.scale import budget_of, default_epsilon
-D = near_symmetric(120, 7, noise=0.05)
+D = mirror_pairs_instance(120, 7, noise=0.05)
 out = {{}}
 for name, budget in (("sigma", None), ("scale", budget_of(default_epsilon(D), 120, D))):
     r = cnbs_landmarks(D, 120, 3, seed=0, effort="quick", budget=budget)
@@ -30,12 +30,13 @@ print(json.dumps(out))
 def _run(threads: str) -> dict:
     env = dict(os.environ, OPENBLAS_NUM_THREADS=threads, OMP_NUM_THREADS=threads, MKL_NUM_THREADS=threads,
                NUMBA_NUM_THREADS=threads)
-    tests = os.path.dirname(os.path.abspath(__file__))
-    res = subprocess.run([sys.executable, "-c", SCRIPT.format(tests=tests)], env=env, capture_output=True,
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    res = subprocess.run([sys.executable, "-c", SCRIPT.format(root=root)], env=env, capture_output=True,
                          text=True, timeout=600, check=True)
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_cnbs_selections_are_identical_across_processes_and_thread_counts():
     """Two processes, one BLAS and numba thread and two (the heat map's candidates then run in two
     threads): the same landmarks and the same scores to the bit (the evaluation selects landmarks in
@@ -52,5 +53,5 @@ def test_cnbs_runs_with_one_blas_thread_whatever_the_caller_allows():
         seen.extend(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
 
     with threadpool_limits(limits=2, user_api="blas"):
-        cnbs_landmarks(near_symmetric(30, 1), 30, 1, effort="quick", progress=progress)
+        cnbs_landmarks(mirror_pairs_instance(30, 1), 30, 1, effort="quick", progress=progress)
     assert seen and set(seen) == {1}

@@ -5,13 +5,10 @@ import json
 import numpy as np
 import pytest
 
-from tests.conftest import run_cli as run
 from shapecond.shapes.synthetic import plane_patch
 
-
-def _write_off(path, V, F):
-    path.write_text(f"OFF\n{len(V)} {len(F)} 0\n" + "\n".join(" ".join(map(str, v)) for v in V) + "\n"
-                    + "\n".join(f"3 {a} {b} {c}" for a, b, c in F) + "\n")
+from tests.helpers import bent, write_off
+from tests.helpers import run_cli as run
 
 
 @pytest.fixture(scope="module")
@@ -22,12 +19,11 @@ def files(tmp_path_factory):
     V = g.vertices * [1.0, 0.55, 0.0]
     perm = np.random.default_rng(0).permutation(len(V))       # target vertex j = source perm[j]
     inv = np.argsort(perm)
-    th = V[:, 0] / 0.4
-    Vb = np.column_stack([0.4 * np.sin(th), V[:, 1], 0.4 * (1 - np.cos(th))])
+    Vb = bent(V, 0.4)
     c, s = np.cos(0.7), np.sin(0.7)
     Vb = Vb @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) + [3.0, -1.0, 2.0]
-    _write_off(d / "src.off", V, g.faces)
-    _write_off(d / "tgt.off", Vb[perm], inv[g.faces])
+    write_off(d / "src.off", V, g.faces)
+    write_off(d / "tgt.off", Vb[perm], inv[g.faces])
     return d, V, inv
 
 
@@ -86,9 +82,8 @@ def test_same_ids_samples_report_the_sample_error(files, capsys, matcher):
     """A bent copy with the same vertex ids: the target is sampled at the source's samples."""
     d, V, inv = files
     g = plane_patch(n=21)
-    th = V[:, 0] / 0.4
-    Vb = np.column_stack([0.4 * np.sin(th), V[:, 1], 0.4 * (1 - np.cos(th))])
-    _write_off(d / "bent.off", Vb, g.faces)
+    Vb = bent(V, 0.4)
+    write_off(d / "bent.off", Vb, g.faces)
     ls = "0,20,300"
     code, out, err = run(capsys, "match", d / "src.off", d / "bent.off", "--landmarks-source", ls,
                          "--landmarks-target", ls, "--samples", "same-ids", "--matcher", matcher,
@@ -105,7 +100,7 @@ def test_same_ids_samples_report_the_sample_error(files, capsys, matcher):
                        "-o", d / "x.txt")
     assert code == 2 and "target landmarks must be the source's" in err and err.count("\n") == 1
     small = plane_patch(n=19)
-    _write_off(d / "small.off", small.vertices, small.faces)
+    write_off(d / "small.off", small.vertices, small.faces)
     code, _, err = run(capsys, "match", d / "src.off", d / "small.off", "--landmarks-source", ls,
                        "--landmarks-target", ls, "--samples", "same-ids", "--points", 60, "-o", d / "x.txt")
     assert code == 2 and "do not share their vertex ids" in err and err.count("\n") == 1

@@ -45,7 +45,9 @@ def pair():
     return src, uv_s, tgt, uv_t, ls, lt
 
 
-@pytest.mark.parametrize("matcher, dense", [("lh05", "zoomout"), ("faq", "zoomout"), ("zoomout", "zoomout"),
+@pytest.mark.parametrize("matcher, dense", [pytest.param("lh05", "zoomout", marks=pytest.mark.slow),
+                                           pytest.param("faq", "zoomout", marks=pytest.mark.slow),
+                                           pytest.param("zoomout", "zoomout", marks=pytest.mark.slow),
                                            ("lh05", "distances"), ("faq", "nearest")])
 def test_bent_copy_is_matched_end_to_end(pair, matcher, dense):
     src, uv_s, tgt, uv_t, ls, lt = pair

@@ -82,6 +82,7 @@ def test_more_landmarks_never_end_below_the_first_three(matcher, seeds):
     assert broken_without == len(seeds)  # the instances exercise the nesting
 
 
+@pytest.mark.slow
 @settings(max_examples=8, deadline=None)
 @given(st.integers(0, 10_000), st.sampled_from(["lh05", "faq"]))
 def test_nested_bound_on_random_instances(seed, matcher):

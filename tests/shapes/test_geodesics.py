@@ -1,4 +1,4 @@
-"""Geodesic backends against closed forms (issue 2 item 4)."""
+"""Geodesic backends against closed forms."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""The metric shape: normalisation, caching, invariances (issue 2 items 6 and done-when)."""
+"""The metric shape: normalisation, caching, invariances."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,5 @@
-"""Farthest-point sampling (issue 2 item 5) and symmetry-consistent sampling (issue 4 item 3)."""
+"""Farthest-point sampling (landmarks first, seeded start, FPS order) and symmetry-consistent sampling
+(samples and targets closed under the mirror map)."""
 
 import numpy as np
 import pytest

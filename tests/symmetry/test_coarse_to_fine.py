@@ -14,8 +14,7 @@ from shapecond.symmetry.scale import budget_of, default_epsilon
 from shapecond.symmetry.score import symmetry_score
 from shapecond.symmetry.search import witness_search
 
-from .conftest import dense_instance
-from .test_search import brute_sigma, same
+from tests.helpers import brute_sigma, dense_instance, same
 
 
 def test_two_levels_against_injective_enumeration():

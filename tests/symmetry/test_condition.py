@@ -12,7 +12,7 @@ from shapecond.symmetry import objective
 from shapecond.symmetry.condition import (MAX_PROBE_POINTS, kappa_bracket, kappa_probes,
                                           optimal_matching, probe_ratio)
 from shapecond.symmetry.exact import enumerate_maps
-from tests.symmetry.conftest import near_symmetric_instance, random_instance
+from tests.helpers import near_symmetric_instance, random_instance
 
 
 def test_kappa_bracket():

@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from tests.conftest import run_cli as run
-from tests.symmetry.conftest import random_instance
+from tests.helpers import run_cli as run
+from tests.helpers import random_instance
 
 
 def test_kappa_json_on_a_matrix(tmp_path, capsys):

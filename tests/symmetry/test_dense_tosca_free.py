@@ -1,4 +1,4 @@
-"""Synthetic stand-ins for what benchmarks/bench_dense.py found on TOSCA (issue 4, resolution report).
+"""Synthetic stand-ins for what benchmarks/bench_dense.py found on TOSCA (the resolution report).
 
 On TOSCA cat3 (a deformed, asymmetric pose) at N = 400, M = 3200 the dense witness moves a single
 sample by about one covering radius across the tip of a thin part; its RMS distortion over all N²

@@ -10,7 +10,7 @@ from shapecond.errors import InputError
 from shapecond.symmetry import objective
 from shapecond.symmetry._bnb import branch_and_bound, swap_search
 from shapecond.symmetry.exact import _enumerate, enumerate_maps, exact_sigma, map_count
-from tests.symmetry.conftest import dense_instance, near_symmetric_instance, random_instance
+from tests.helpers import dense_instance, near_symmetric_instance, random_instance
 
 
 def brute_force(D, n, landmarks=()):

@@ -9,7 +9,7 @@ from shapecond.shapes.synthetic import generate
 from shapecond.symmetry import objective
 from shapecond.symmetry.exact import exact_sigma
 from shapecond.symmetry.paper_bound import MAX_PAPER_POINTS, paper_eigen_diagnostic, paper_matrices
-from tests.symmetry.conftest import near_symmetric_instance, random_instance
+from tests.helpers import near_symmetric_instance, random_instance
 
 
 def test_quadratic_forms_are_d2_and_dist2_of_a_map():

@@ -9,7 +9,7 @@ from shapecond.errors import TooLargeError
 from shapecond.symmetry import objective
 from shapecond.symmetry.exact import exact_sigma
 from shapecond.symmetry.relax import MAX_LP_POINTS, build_lp, lp_size, lp_upper_bound
-from tests.symmetry.conftest import dense_instance, mixed_instances, near_symmetric_instance, random_instance
+from tests.helpers import dense_instance, mixed_instances, near_symmetric_instance, random_instance
 
 
 def lp_point(D, n, landmarks, t):

@@ -1,4 +1,4 @@
-"""Resolution report (issue 4 item 2) on small dense instances."""
+"""Resolution report on small dense instances."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from shapecond.symmetry import objective as obj
 from shapecond.symmetry.resolution import resolution_report
 from shapecond.symmetry.search import witness_search
 
-from .conftest import dense_instance
+from tests.helpers import dense_instance
 
 
 def test_exact_symmetry_among_targets_is_symmetric():

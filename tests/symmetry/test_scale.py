@@ -57,6 +57,7 @@ def test_lower_bound_attained_and_exact_on_small_instances(seed, factor, n_landm
     assert s.displacement == pytest.approx(exact, rel=1e-9, abs=1e-12)  # the search finds the optimum here
 
 
+@pytest.mark.slow
 @settings(max_examples=10, deadline=None)
 @given(st.integers(0, 10_000))
 def test_monotone_in_epsilon_and_in_landmarks(seed):

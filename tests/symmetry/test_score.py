@@ -13,7 +13,7 @@ from shapecond.symmetry.resolution import classify
 from shapecond.symmetry.score import symmetry_score
 from shapecond.symmetry.search import best_single_swap, witness_search
 
-from .conftest import mixed_instances, near_symmetric_instance, random_instance
+from tests.helpers import mixed_instances, near_symmetric_instance, random_instance
 
 
 def test_bracket_contains_exact_and_kappa_follows_theorem_4_1():
@@ -89,7 +89,8 @@ def _mirror_map(shape):
 
 @pytest.mark.parametrize("delta", [0.0, 0.02, 0.05])
 def test_animal_n100_mirror_is_the_witness(delta):
-    """Issue 3 done-when: inf at delta = 0 with the mirror as witness; mirror for delta <= 0.05."""
+    """The animal at N = 100: σ = inf at delta = 0 with the mirror as witness; the mirror is still the
+    witness for delta <= 0.05."""
     shape = _animal_shape(delta, 100)
     mirror = _mirror_map(shape)
     res = witness_search(shape.D, seed=0)

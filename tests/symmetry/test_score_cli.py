@@ -1,4 +1,4 @@
-"""``shapecond score``: JSON keys of issues 3 and 4, landmarks in input ids, errors."""
+"""``shapecond score``: JSON keys (bracket, witness, resolution report, δ(ε)), landmarks in input ids, errors."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from click.testing import CliRunner
 
 from shapecond.cli import cli
 
-from .conftest import near_symmetric_instance
+from tests.helpers import near_symmetric_instance
 
 
 def run(*args):

@@ -1,4 +1,4 @@
-"""HTML pages (issue 26): self-contained, deterministic, built from the PNGs' scenes, and working in a
+"""HTML pages: self-contained, deterministic, built from the PNGs' scenes, and working in a
 real headless Chromium with the network blocked (the browser tests skip when Chromium or Playwright is
 missing)."""
 
@@ -21,7 +21,7 @@ from shapecond.viz import pages
 from shapecond.viz.render import view_rotation
 from shapecond.viz.scene import heatmap_scene, make_scene
 
-from tests.conftest import run_cli
+from tests.helpers import run_cli
 
 SMALL = "demo:animal:resolution=0.05"
 
@@ -223,6 +223,7 @@ def test_browser_score_and_landmarks_pages(browser, tmp_path):
     assert page.locator(".sc-landmarks li").count() == 4 and "σ after" in page.locator(".sc-side").inner_text()
 
 
+@pytest.mark.slow
 def test_browser_match_page_with_errors(browser, tmp_path, capsys):
     out = tmp_path / "match.html"
     code, _, err = run_cli(capsys, "match", SMALL, "demo:animal:resolution=0.05,delta=0.1", "--landmarks-source",

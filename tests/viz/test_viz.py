@@ -1,4 +1,4 @@
-"""Pictures and PLY files (issue 6 item 4): written, readable, and showing what they should."""
+"""Pictures and PLY files: written, readable, and showing what they should."""
 
 from types import SimpleNamespace
 
