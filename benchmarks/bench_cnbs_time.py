@@ -32,7 +32,7 @@ from pathlib import Path
 from shapecond.landmarks import monotone
 from shapecond.landmarks.cnbs import cnbs_landmarks, heat_map
 from shapecond.shapes.io import load_geometry, read_symmetry_map
-from shapecond.shapes.metric import metric_shape
+from shapecond.api import metric_shape
 from shapecond.symmetry.scale import budget_of, default_epsilon
 from shapecond.symmetry.search import witness_search
 

@@ -52,7 +52,7 @@ from _results import command_line, machine, run_isolated, write_section  # noqa:
 from shapecond import cache  # noqa: E402
 from shapecond.shapes import metric as metric_mod  # noqa: E402
 from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
-from shapecond.shapes.metric import metric_shape  # noqa: E402
+from shapecond.api import metric_shape  # noqa: E402
 from shapecond.symmetry import objective as obj  # noqa: E402
 from shapecond.symmetry.resolution import resolution_for_shape  # noqa: E402
 from shapecond.symmetry.score import symmetry_score  # noqa: E402
@@ -175,7 +175,7 @@ def cache_folder(folder):
 BUILD = """
 import os, time; os.environ['SHAPECOND_CACHE'] = {cache!r}
 from shapecond.shapes.io import load_geometry
-from shapecond.shapes.metric import metric_shape
+from shapecond.api import metric_shape
 g = load_geometry({path!r})
 w, c = time.perf_counter(), time.process_time()
 sh = metric_shape(g, n_points={n}, target={target!r}, target_factor={f})
@@ -185,7 +185,7 @@ print(time.perf_counter() - w, time.process_time() - c, sh.n_targets)
 SCORE = """
 import time
 from shapecond.shapes.io import load_geometry
-from shapecond.shapes.metric import metric_shape
+from shapecond.api import metric_shape
 from shapecond.symmetry.score import symmetry_score
 from shapecond.symmetry.resolution import resolution_for_shape
 from shapecond.symmetry.search import witness_search

@@ -204,7 +204,7 @@ def geometry_tables(data: dict, dataset: Path) -> str:
     from shapecond.evaluation.datasets import read_class
     from shapecond.matching.sampled import sample_surface, surface_at
     from shapecond.shapes.io import load_geometry, read_symmetry_map
-    from shapecond.shapes.metric import metric_shape
+    from shapecond.api import metric_shape
 
     st = data["settings"]
     methods = st["methods"]
@@ -223,7 +223,7 @@ def geometry_tables(data: dict, dataset: Path) -> str:
     for cls in _classes(st):
         paths = list(read_class(Path(dataset) / cls).shapes)
         g = load_geometry(paths[0])
-        shape = metric_shape(g, st["n_points"], backend=st["backend"], seed=st["seed"])
+        shape = metric_shape(g, st["n_points"], backend=st["backend"], seed=st["seed"], target="samples")
         r = shape.covering_radius
         sym = None
         sym_file = Path(dataset) / "symmetries" / f"{cls}.sym"

@@ -117,7 +117,7 @@ DENSE = """
 import json, os, time
 from shapecond.shapes import sampling
 from shapecond.shapes.io import load_geometry
-from shapecond.shapes.metric import metric_shape
+from shapecond.api import metric_shape
 solved = [0]
 _fetch = sampling._Rows.fetch
 def fetch(self, v):
@@ -152,12 +152,12 @@ def stage_dense(root, store, names):
 PHASES = """
 import json, os, time
 t0 = time.perf_counter()
-from shapecond.cli.common import build_shape, load_geometry_or_matrix
+from shapecond.api import metric_shape
 from shapecond.symmetry.resolution import resolution_for_shape
 from shapecond.symmetry.score import symmetry_score
 import shapecond.symmetry.search  # noqa: F401  (loads the compiled kernels)
 t1 = time.perf_counter()
-shape = build_shape({path!r}, loaded=load_geometry_or_matrix({path!r}))
+shape = metric_shape({path!r})
 t2 = time.perf_counter()
 sc = symmetry_score(shape.D, shape.n_points, seed=0)
 t3 = time.perf_counter()
@@ -199,7 +199,7 @@ sys.path.insert(0, {bench!r})
 import numpy as np
 from bench_dense import mirror_targets
 from shapecond.shapes.io import load_geometry
-from shapecond.shapes.metric import metric_shape
+from shapecond.api import metric_shape
 from shapecond.symmetry.resolution import resolution_for_shape
 from shapecond.symmetry.score import symmetry_score
 from pathlib import Path
@@ -230,7 +230,7 @@ def stage_flags(root, store, names):
 MATRIX = """
 import time
 from shapecond.shapes.io import load_geometry
-from shapecond.shapes.metric import metric_shape
+from shapecond.api import metric_shape
 from shapecond.shapes.geodesics import DistanceSolver
 g = load_geometry({path!r})
 t = time.perf_counter()
@@ -238,7 +238,7 @@ if {backend!r} == "exact":
     DistanceSolver(g, "exact").distances(range(20))
     seconds = (time.perf_counter() - t) * {points} / 20
 else:
-    metric_shape(g, n_points={points}, backend={backend!r}, cache=False)
+    metric_shape(g, n_points={points}, backend={backend!r}, target="samples", cache=False)
     seconds = time.perf_counter() - t
 print(g.n_vertices, seconds)
 """

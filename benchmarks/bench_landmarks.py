@@ -37,7 +37,7 @@ from shapecond.landmarks.cnbs import cnbs_landmarks, full_heat_map, heat_map  # 
 from shapecond.landmarks.fps import fps_landmarks  # noqa: E402
 from shapecond.landmarks.pls import pls_landmarks  # noqa: E402
 from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
-from shapecond.shapes.metric import metric_shape  # noqa: E402
+from shapecond.api import metric_shape  # noqa: E402
 from shapecond.shapes.synthetic import animal  # noqa: E402
 from shapecond.symmetry.search import witness_search  # noqa: E402
 

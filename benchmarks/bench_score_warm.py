@@ -47,18 +47,18 @@ except SystemExit:
 """
 
 PREPARE = """
-from shapecond.cli.common import build_shape, load_geometry_or_matrix
-build_shape({path!r}, loaded=load_geometry_or_matrix({path!r}))
+from shapecond.api import metric_shape
+metric_shape({path!r})
 """
 
-#: One warm score, timed by phase: the report's steps are wrapped where ``score_shape`` looks them up.
+#: One warm score, timed by phase: the report's steps are wrapped where ``score_report`` looks them up.
 PHASES = """
 import json, sys, time
 t0 = time.perf_counter()
 import shapecond.symmetry.report as R
-from shapecond.cli.common import build_shape, load_geometry_or_matrix
+from shapecond.api import metric_shape
 t1 = time.perf_counter()
-shape = build_shape({path!r}, loaded=load_geometry_or_matrix({path!r}))
+shape = metric_shape({path!r})
 t2 = time.perf_counter()
 spent = {{}}
 def timed(name, label):
@@ -68,7 +68,7 @@ def timed(name, label):
     setattr(R, name, g)
 timed("symmetry_score", "sigma"); timed("resolution_for_shape", "resolution")
 timed("_scale" if hasattr(R, "_scale") else "scale_score", "delta")
-r = R.score_shape(shape)
+r = (getattr(R, "score_report", None) or getattr(R, "score_shape"))(shape)
 t3 = time.perf_counter()
 print("__OUT__" + json.dumps(dict(imports=t1 - t0, load=t2 - t1, total=t3 - t0, **spent)))
 """

@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, peak_rss_mb, write_section  # noqa: E402
 
 from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
-from shapecond.shapes.metric import metric_shape  # noqa: E402
+from shapecond.api import metric_shape  # noqa: E402
 from shapecond.symmetry.resolution import resolution_for_shape  # noqa: E402
 from shapecond.symmetry.search import best_single_swap, witness_search  # noqa: E402
 
@@ -50,7 +50,7 @@ def table_bijections(root, shapes, sizes):
     for name in shapes:
         g = geometry(root, name)
         for n in sizes:
-            D = metric_shape(g, n_points=n).D
+            D = metric_shape(g, n_points=n, target="samples").D
             tracemalloc.start()
             res, w, c = timed(lambda: witness_search(D))
             peak = tracemalloc.get_traced_memory()[1] / 2**20

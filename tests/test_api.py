@@ -188,7 +188,9 @@ def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call,
     def no_work(*args, **kwargs):
         raise AssertionError("the shape was loaded before the keywords were checked")
 
-    monkeypatch.setattr(sc.api, "load", no_work)
+    from shapecond.api import inputs
+
+    monkeypatch.setattr(inputs, "_loaded", no_work)  # every input is read through it
     with pytest.raises(InputError, match=re.escape(needle)):
         call()
 

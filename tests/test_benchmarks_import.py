@@ -137,7 +137,7 @@ def test_a_benchmark_imports_without_side_effects_and_names_only_what_exists(iso
 
 def test_a_stale_name_is_found():
     """The check itself: a removed function of a shapecond module is reported, a present one is not."""
-    code = ast.parse("from shapecond.shapes import metric as m\nm.metric_shape\nm._cache_path(m._cache_key(1))\n")
+    code = ast.parse("from shapecond.shapes import metric as m\nm.build_metric_shape\nm._cache_path(m._cache_key(1))\n")
     assert _stale_attributes(code, _bindings(code)) == ["line 3: m._cache_key (_cache_key missing)",
                                                         "line 3: m._cache_path (_cache_path missing)"]
     with pytest.raises(ImportError):

@@ -18,13 +18,29 @@ from ._jit_cache import ensure_writable_cache
 ensure_writable_cache()
 del ensure_writable_cache
 
-from ._version import __version__  # noqa: E402
-from .api import (HeatMapResult, KappaResult, LandmarkResult, LocalResult, MatchResult, ScoreResult,  # noqa: E402
-                  SymmetryProblem, heatmap, info, kappa, landmarks, load, local_score, match, metric_shape, score)
-from .errors import InputError, OutputError, ShapecondError, TooLargeError  # noqa: E402
-from .evaluation import evaluate  # noqa: E402
+import importlib  # noqa: E402
 
-__all__ = ["HeatMapResult", "InputError", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult",
-           "OutputError", "ScoreResult", "ShapecondError", "SymmetryProblem", "TooLargeError", "__version__",
-           "evaluate", "heatmap", "info", "kappa", "landmarks", "load", "local_score", "match", "metric_shape",
-           "score"]
+from ._version import __version__  # noqa: E402
+from .errors import InputError, OutputError, ShapecondError, TooLargeError  # noqa: E402
+
+#: The front door's names (``shapecond.api``) and ``evaluate`` (``shapecond.evaluation``), imported on first use.
+_API = ("HeatMapResult", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult", "ScoreResult",
+        "SymmetryProblem", "heatmap", "info", "kappa", "landmarks", "load", "local_score", "match", "metric_shape",
+        "score")
+
+__all__ = sorted(_API + ("InputError", "OutputError", "ShapecondError", "TooLargeError", "__version__", "evaluate"))
+
+
+def __getattr__(name):
+    if name in _API:
+        value = getattr(importlib.import_module(".api", __name__), name)
+    elif name == "evaluate":
+        value = importlib.import_module(".evaluation", __name__).evaluate
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -10,7 +10,7 @@ import pytest
 
 from shapecond.batch import schema
 from shapecond.batch.inputs import content_hash, expand_inputs
-from shapecond.batch.rows import params_key, parse_what, score_shape
+from shapecond.batch.rows import params_key, parse_what, shape_row
 from shapecond.batch.run import run_batch
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
@@ -63,7 +63,7 @@ def test_what_is_parsed_and_checked():
 def test_a_row_holds_what_info_score_local_and_landmarks_print(shape_dir, capsys):
     path = shape_dir / "blob1.off"
     opts = {"points": 24, "seed": 3, "effort": "quick", "what": ["score", "local", "landmarks:3:fps"]}
-    row = score_shape(str(path), content_hash(str(path)), opts, params_key(opts))
+    row = shape_row(str(path), content_hash(str(path)), opts, params_key(opts))
     assert row["error"] is None and set(row) == set(schema.NAMES)
     _, out, _ = run_cli(capsys, "info", path, "--json")
     info = json.loads(out)

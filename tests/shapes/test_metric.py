@@ -7,11 +7,11 @@ from shapecond.errors import InputError
 from shapecond.shapes import synthetic
 from shapecond.shapes.geometry import Geometry
 from shapecond.shapes.validate import make_geometry
-from shapecond.shapes.metric import from_distance_matrix, metric_shape, restrict_targets
+from shapecond.shapes.metric import build_metric_shape, from_distance_matrix, restrict_targets
 
 
 def test_metric_shape_is_a_normalised_metric():
-    s = metric_shape(synthetic.bumpy_blob(3), n_points=40, cache=False)
+    s = build_metric_shape(synthetic.bumpy_blob(3), n_points=40, cache=False)
     assert s.D.shape == (40, 40) and np.isclose(s.D.max(), 1.0)
     assert np.allclose(s.D, s.D.T) and np.all(np.diag(s.D) == 0)
     assert s.backend == "heat" and s.metric == "geodesic" and s.n_points == s.n_targets == 40
@@ -21,11 +21,11 @@ def test_metric_shape_is_a_normalised_metric():
 def test_cache_returns_the_same_shape(tmp_path, monkeypatch):
     monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path))
     g = synthetic.bumpy_blob(3)
-    a = metric_shape(g, n_points=30)
+    a = build_metric_shape(g, n_points=30)
     assert len(list(tmp_path.glob("metric-*.npz"))) == 1
-    b = metric_shape(g, n_points=30)
+    b = build_metric_shape(g, n_points=30)
     assert np.array_equal(a.D, b.D) and np.array_equal(a.samples, b.samples)
-    c = metric_shape(g, n_points=30, seed=1)  # a parameter change is a new entry
+    c = build_metric_shape(g, n_points=30, seed=1)  # a parameter change is a new entry
     assert len(list(tmp_path.glob("metric-*.npz"))) == 2 and c is not None
 
 
@@ -35,9 +35,9 @@ def test_invariant_to_relabelling_and_uniform_scaling():
     inv = np.argsort(perm)
     relabelled = make_geometry(g.vertices[perm], inv[g.faces])
     scaled = make_geometry(3.7 * g.vertices, g.faces)
-    base = metric_shape(g, n_points=25, landmarks=[11], cache=False)
-    other = metric_shape(relabelled, n_points=25, landmarks=[int(inv[11])], cache=False)
-    big = metric_shape(scaled, n_points=25, landmarks=[11], cache=False)
+    base = build_metric_shape(g, n_points=25, landmarks=[11], cache=False)
+    other = build_metric_shape(relabelled, n_points=25, landmarks=[int(inv[11])], cache=False)
+    big = build_metric_shape(scaled, n_points=25, landmarks=[11], cache=False)
     assert np.array_equal(perm[other.samples], base.samples)
     assert np.allclose(other.D, base.D, atol=1e-6)
     assert np.array_equal(big.samples, base.samples)
@@ -46,8 +46,8 @@ def test_invariant_to_relabelling_and_uniform_scaling():
 
 def test_dense_targets_have_the_samples_as_prefix():
     g = synthetic.bumpy_blob(3)
-    dense = metric_shape(g, n_points=20, target="dense", target_factor=4, cache=False)
-    plain = metric_shape(g, n_points=20, cache=False)
+    dense = build_metric_shape(g, n_points=20, target="dense", target_factor=4, cache=False)
+    plain = build_metric_shape(g, n_points=20, cache=False)
     assert dense.n_targets == 80 and dense.n_points == 20
     assert np.array_equal(dense.samples[:20], plain.samples)
     small = restrict_targets(dense, 40)
@@ -56,7 +56,7 @@ def test_dense_targets_have_the_samples_as_prefix():
 
 def test_symmetric_animal_samples_are_mirror_closed():
     g = synthetic.animal(resolution=0.05)
-    s = metric_shape(g, n_points=40, cache=False)
+    s = build_metric_shape(g, n_points=40, cache=False)
     inv = {v: k for k, v in enumerate(s.samples)}
     mirror = np.array([inv[g.symmetry[v]] for v in s.samples])
     assert np.allclose(s.D[np.ix_(mirror, mirror)], s.D, atol=1e-9)
@@ -69,6 +69,6 @@ def test_matrix_input_and_errors():
     assert list(s.samples[:2]) == [4, 1] and np.isclose(s.D.max(), 1)
     assert np.allclose(s.D * s.scale, D[np.ix_(s.samples, s.samples)])
     with pytest.raises(InputError, match="fewer than"):
-        metric_shape(make_geometry(pts.repeat(2, 1)[:, :3]), n_points=10)
+        build_metric_shape(make_geometry(pts.repeat(2, 1)[:, :3]), n_points=10)
     with pytest.raises(InputError, match="zero"):
-        metric_shape(Geometry(np.zeros((5, 3)), None, np.arange(5)), n_points=3, metric="euclidean", cache=False)
+        build_metric_shape(Geometry(np.zeros((5, 3)), None, np.arange(5)), n_points=3, metric="euclidean", cache=False)

@@ -81,7 +81,7 @@ def test_too_few_targets_for_two_levels_searches_once(m, monkeypatch):
     assert same(sc.sigma_lower, witness_search(D, 5).sigma)
 
 
-def test_score_shape_in_two_levels_keeps_delta_within_its_budget(monkeypatch):
+def test_score_report_in_two_levels_keeps_delta_within_its_budget(monkeypatch):
     """δ(ε) searched over the first M/2 targets and refined over M: a feasible witness, at least the coarse δ."""
     from shapecond.api import metric_shape
     from shapecond.symmetry import report
@@ -90,7 +90,7 @@ def test_score_shape_in_two_levels_keeps_delta_within_its_budget(monkeypatch):
     monkeypatch.setattr(resolution, "TWO_LEVEL_SECONDS", 0.0)
     shape = metric_shape("demo:animal", n_points=16, target="dense", cache=False)
     m = shape.D.shape[0]
-    r = report.score_shape(shape)
+    r = report.score_report(shape)
     assert r.score.coarse is not None and r.resolution.n_targets_lo == m // 2
     d = r.scale
     assert d.distortion <= d.epsilon * (1 + 1e-9)

@@ -24,13 +24,26 @@ with a one-line message for unusable input, an unknown keyword or work beyond
 :class:`~shapecond.errors.OutputError` (an ``OSError``) for a file it cannot write.
 """
 
-from .inputs import DEFAULT_POINTS, info, load, metric_shape, require_mesh
-from .matching import match
-from .options import ShapeOptions
-from .problem import SymmetryProblem
-from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, MatchResult, ScoreResult
-from .scores import heatmap, kappa, landmarks, local_score, score
+import importlib
 
-__all__ = ["DEFAULT_POINTS", "HeatMapResult", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult",
-           "ScoreResult", "ShapeOptions", "SymmetryProblem", "heatmap", "info", "kappa", "landmarks", "load",
-           "local_score", "match", "metric_shape", "require_mesh", "score"]
+#: Where each public name lives; a module is imported when one of its names is first used, so
+#: ``import shapecond`` (and ``shapecond info``) does not load the searches' compiled kernels.
+_HOME = {"DEFAULT_POINTS": "inputs", "info": "inputs", "load": "inputs", "metric_shape": "inputs",
+         "require_mesh": "inputs", "match": "matching", "ShapeOptions": "options", "SymmetryProblem": "problem",
+         "HeatMapResult": "results", "KappaResult": "results", "LandmarkResult": "results", "LocalResult": "results",
+         "MatchResult": "results", "ScoreResult": "results", "heatmap": "scores", "kappa": "scores",
+         "landmarks": "scores", "local_score": "scores", "score": "scores"}
+
+__all__ = sorted(_HOME)
+
+
+def __getattr__(name):
+    if name not in _HOME:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{_HOME[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_HOME))

@@ -110,6 +110,13 @@ def info(x) -> dict:
 
     Keys: input, kind, n_vertices, n_faces, components, boundary_edges,
     isolated_vertices, bounding_box, problems (a list of one-line strings).
+
+    Examples
+    --------
+    >>> import shapecond as sc
+    >>> report = sc.info("demo:animal")
+    >>> report["kind"], report["problems"]
+    ('mesh', [])
     """
     if not isinstance(x, (str, Path)):
         raise InputError("info() describes a file: give its path (or a demo:NAME specification)")
@@ -154,10 +161,7 @@ def shape_of(x, n_points, landmarks, opts: ShapeOptions) -> MetricShape:
     if isinstance(loaded, np.ndarray):
         return _matrix_shape(loaded, n_points, ids, opts, str(x) if isinstance(x, (str, Path)) else "matrix")
     n = min(DEFAULT_POINTS, loaded.n_vertices) if n_points is None else n_points
-    return build_metric_shape(loaded, n_points=n, metric=opts.metric, backend=opts.backend, seed=opts.seed,
-                              landmarks=loaded.to_internal(ids), target=opts.target or "dense",
-                              target_factor=opts.target_factor, cache=opts.cache, progress=opts.progress,
-                              force=opts.force)
+    return build_metric_shape(loaded, n, loaded.to_internal(ids), opts.sampling("dense"))
 
 
 def _matrix_shape(D: np.ndarray, n_points, ids, opts: ShapeOptions, name: str) -> MetricShape:

@@ -10,7 +10,8 @@ from ..checks import check_int, check_seed, parse_ids
 from ..errors import InputError
 from .guards import guard_match
 from .inputs import DEFAULT_POINTS, load
-from .options import BACKENDS, check_choice, check_flag
+from ..checks import check_choice, check_flag
+from .options import BACKENDS
 from .results import MatchResult
 
 #: Keywords of ``match`` besides the matcher's own options.

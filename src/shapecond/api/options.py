@@ -12,12 +12,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
-from ..checks import check_choice, check_flag, check_int, check_seed
+from ..checks import check_flag
 from ..errors import InputError
+from ..shapes.metric import Sampling
 
-METRICS = ("geodesic", "euclidean")
+#: Geodesic backends a user may ask for (``shapes.geodesics``; "euclidean" comes with ``metric``).
 BACKENDS = ("heat", "fmm", "exact")
-TARGETS = ("samples", "dense")
 EFFORTS = ("quick", "default", "thorough")
 
 
@@ -58,14 +58,17 @@ class ShapeOptions:
     symmetry_map: object = None
 
     def __post_init__(self):
-        check_choice(self.metric, "metric", METRICS)
-        check_choice(self.backend, "backend", BACKENDS)
-        if self.target is not None:
-            check_choice(self.target, "target", TARGETS)
-        object.__setattr__(self, "seed", check_seed(self.seed, "seed"))
-        object.__setattr__(self, "target_factor", check_int(self.target_factor, "target_factor", lo=1, hi=1000))
         for name in ("cache", "progress", "force", "largest_component"):
             object.__setattr__(self, name, check_flag(getattr(self, name), name))
+        checked = self.sampling("samples")  # the sampling's own checks (shapes.metric.Sampling)
+        object.__setattr__(self, "seed", checked.seed)
+        object.__setattr__(self, "target_factor", checked.target_factor)
+
+    def sampling(self, default_target: str) -> Sampling:
+        """The ``Sampling`` of these options, ``default_target`` where ``target`` is None."""
+        return Sampling(metric=self.metric, backend=self.backend, seed=self.seed,
+                        target=self.target or default_target, target_factor=self.target_factor, cache=self.cache,
+                        progress=self.progress, force=self.force)
 
     @classmethod
     def take(cls, options: dict, caller: str, others=()) -> tuple[ShapeOptions, dict]:

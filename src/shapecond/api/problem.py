@@ -10,7 +10,8 @@ import numpy as np
 from ..checks import check_float, check_int, check_seed, parse_ids
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import shape_of
-from .options import EFFORTS, ShapeOptions, check_choice
+from ..checks import check_choice
+from .options import EFFORTS, ShapeOptions
 from .results import HeatMapResult, LandmarkResult, ScoreResult, promote
 
 
@@ -75,15 +76,16 @@ class SymmetryProblem:
     def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = 10.0,
               epsilon: float | None = None) -> ScoreResult:
         """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search."""
-        from ..symmetry.report import score_report
+        from ..symmetry.report import ScoreSettings, score_report
         from ..symmetry.score import check_exact
 
         ids = parse_ids(landmarks)
         check_exact(exact)
         if epsilon is not None:
             epsilon = check_float(epsilon, "epsilon", lo=0.0)
-        report = score_report(self.shape, ids, exact=exact, upper=upper, time_limit=time_limit, seed=self.seed,
-                              effort=self.effort, force=self.force, epsilon=epsilon, search=self.search(ids))
+        settings = ScoreSettings(exact=exact, upper=upper, time_limit=time_limit, seed=self.seed, effort=self.effort,
+                                 force=self.force, epsilon=epsilon)
+        report = score_report(self.shape, ids, settings, search=self.search(ids))
         return promote(report, ScoreResult)
 
     def heatmap(self, landmarks=(), *, resolve_fraction: float | None = None, score: str = "sigma",

@@ -19,7 +19,8 @@ from ..checks import check_float, check_int, parse_ids
 from ..errors import InputError
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import load, require_mesh, shape_of
-from .options import EFFORTS, ShapeOptions, check_choice, refuse_unknown
+from ..checks import check_choice, check_flag
+from .options import EFFORTS, ShapeOptions
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 
 #: Largest N of κ probes beyond the landmarks (exact matching enumerates every map).
@@ -57,20 +58,19 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     >>> result.verdict.startswith("exact symmetry")
     True
     """
-    from ..symmetry.report import score_report
+    from ..symmetry.report import ScoreSettings, score_report
     from ..symmetry.score import check_exact
 
     opts, _ = ShapeOptions.take(options, "score")
     check_exact(exact)
     settings = _score_settings(upper, time_limit, effort, epsilon)
     shape = shape_of(x, n_points, landmarks, opts)
-    report = score_report(shape, parse_ids(landmarks), exact=exact, seed=opts.seed, force=opts.force, **settings)
+    report = score_report(shape, parse_ids(landmarks),
+                          ScoreSettings(exact=exact, seed=opts.seed, force=opts.force, **settings))
     return promote(report, ScoreResult)
 
 
 def _score_settings(upper, time_limit, effort, epsilon) -> dict:
-    from ..checks import check_flag
-
     return dict(upper=check_flag(upper, "upper"), effort=check_choice(effort, "effort", EFFORTS),
                 time_limit=None if time_limit is None else check_float(time_limit, "time_limit", lo=0.0, lo_open=True),
                 epsilon=None if epsilon is None else check_float(epsilon, "epsilon", lo=0.0))

@@ -69,8 +69,32 @@ def _unreadable_row(spec, params, reason) -> dict:
     return row
 
 
-def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=None, resume=False,
-              overwrite=False, progress=False) -> BatchSummary:
+@dataclass(frozen=True)
+class BatchRun:
+    """Where and how a batch runs (the keywords of ``run_batch`` after ``what``).
+
+    Attributes
+    ----------
+    n_jobs, scheduler : where the shapes are scored (``parallel.runner``).
+    resume : keep the rows already in ``out`` and score only the shapes without one;
+        without it an ``out`` holding rows is refused unless ``overwrite``.
+    overwrite : start ``out`` afresh (only a batch table is emptied).
+    progress : a progress bar on stderr.
+    """
+
+    n_jobs: int = 1
+    scheduler: object = None
+    resume: bool = False
+    overwrite: bool = False
+    progress: bool = False
+
+    @property
+    def mode(self) -> str:
+        """``Table``'s mode: "overwrite", "resume" or "new"."""
+        return "overwrite" if self.overwrite else ("resume" if self.resume else "new")
+
+
+def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary:
     """Score every shape named by ``inputs`` into the table ``out`` (see module docstring).
 
     Parameters
@@ -81,18 +105,16 @@ def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=No
         ``geodesic_backend``, ``seed``, ``largest_component``, ``no_cache``,
         ``target``, ``target_factor``, ``symmetry_map``) and ``effort``.
     what : ``score``, ``local``, ``landmarks:K:METHOD`` (``rows.parse_what``).
-    n_jobs, scheduler : where the shapes are scored (``parallel.runner``).
-    resume : keep the rows already in ``out`` and score only the shapes without one;
-        without it an ``out`` holding rows is refused unless ``overwrite``.
+    **how : the fields of ``BatchRun`` (``n_jobs``, ``scheduler``, ``resume``, ``overwrite``, ``progress``).
     """
     t0 = time.perf_counter()
+    how = BatchRun(**how)
     options = with_defaults({**(options or {}), "what": what})
     params = params_key(options)
     table_format(out)
-    check_where(n_jobs, scheduler)
+    check_where(how.n_jobs, how.scheduler)
     specs = expand_inputs(inputs)
-    mode = "overwrite" if overwrite else ("resume" if resume else "new")
-    with Table(out, mode) as table:
+    with Table(out, how.mode) as table:
         hashes = content_hashes(specs)
         have = {schema.row_key(r): r for r in table.rows}
         keys = [(s, h, params) for s, (h, _) in zip(specs, hashes)]
@@ -102,20 +124,20 @@ def run_batch(inputs, out, options=None, what=("score",), n_jobs=1, scheduler=No
             if spec in unreadable:
                 table.append(_unreadable_row(spec, params, unreadable[spec]))
         readable = [k for k in todo if k[0] not in unreadable]
-        where = (_score(table, readable, options, n_jobs, scheduler, progress) if readable
+        where = (_score(table, readable, options, how) if readable
                  else "this process" if todo else "nothing to do")
         done = {schema.row_key(r): r for r in table.rows}
         batch_rows = [done[k] for k in keys]
     return _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)
 
 
-def _score(table, todo, options, n_jobs, scheduler, progress) -> str:
+def _score(table, todo, options, how: BatchRun) -> str:
     from tqdm import tqdm
 
     tasks = [(shape_row, (spec, digest, options, params), {}) for spec, digest, params in todo]
     failed = 0
-    with runner(n_jobs, scheduler) as run, \
-            tqdm(total=len(tasks), desc="scoring", unit="shape", disable=not progress) as bar:
+    with runner(how.n_jobs, how.scheduler) as run, \
+            tqdm(total=len(tasks), desc="scoring", unit="shape", disable=not how.progress) as bar:
         for i, row, error in run.iter_tasks(tasks):
             if error is not None:
                 row = _failed_row(*todo[i], error)

@@ -34,7 +34,7 @@ EXIT_SOME_FAILED = 3
 @click.option("--overwrite", is_flag=True, help="Start --out afresh even if it holds rows (only a batch table "
               "is emptied; any other file is refused).")
 @json_option
-def command(inputs, out, effort, what, jobs, scheduler, resume, overwrite, as_json, **kw):
+def command(inputs, out, what, as_json, **kw):
     """Score every shape in INPUT... (files, folders, glob patterns) into one table.
 
     One row per shape with info's counts and problems, the global score, and on
@@ -42,12 +42,12 @@ def command(inputs, out, effort, what, jobs, scheduler, resume, overwrite, as_js
     and the batch goes on.  Exit status 0 when every shape was scored, 3 when
     some failed.
     """
-    if resume and overwrite:
+    if kw["resume"] and kw["overwrite"]:
         raise InputError("--resume and --overwrite exclude each other")
     options = pop_shape_options(kw)
-    options["effort"] = effort
-    summary = run_batch(inputs, out, options, what=what, n_jobs=jobs, scheduler=scheduler, resume=resume,
-                        overwrite=overwrite, progress=progress_enabled())
+    options["effort"] = kw["effort"]
+    summary = run_batch(inputs, out, options, what=what, n_jobs=kw["jobs"], scheduler=kw["scheduler"],
+                        resume=kw["resume"], overwrite=kw["overwrite"], progress=progress_enabled())
     if as_json:
         emit_json(summary)
     else:

@@ -26,7 +26,8 @@ from ..evaluation.report import by_protocol, correlations, protocols, write_repo
 from ..evaluation.run import DEFAULT_METHODS, PROTOCOL_CHOICES
 from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..parallel import runner
-from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_option, progress_enabled
+from .common import (BACKEND_OPTION, NO_CACHE_OPTION, SEED_OPTION, Int, emit_json, force_option, info, json_option,
+                     points_option, progress_enabled)
 
 
 def _names(text, allowed=None, what="name"):
@@ -67,13 +68,11 @@ def _counts(text) -> list[int]:
               show_default=True, help="Folder for report.md, results.json and the PNG plots.")
 @click.option("--quick", is_flag=True,
               help="A small run: wolf and centaur (or the first two classes), 2 targets each, N = 200.")
-@click.option("--points", "-n", type=Int(3, MAX_POINTS), default=None,
-              help="Samples per shape [default: 400, or 200 with --quick].")
+@points_option()
 @click.option("--max-targets", type=Int(1), default=None, help="Match at most this many shapes per class.")
-@click.option("--seed", type=SEED, default=0, show_default=True)
-@click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
-              show_default=True)
-@click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
+@SEED_OPTION
+@BACKEND_OPTION
+@NO_CACHE_OPTION
 @click.option("--protocol", type=click.Choice(PROTOCOL_CHOICES), default="auto", show_default=True,
               help="auto: remeshed for classes with corres/*.vts, corresponding otherwise; corresponding: "
                    "targets sampled at the null shape's sample vertices (the κ setting); independent: each "
@@ -84,25 +83,27 @@ def _counts(text) -> list[int]:
                    "LocalCluster with W workers.")
 @force_option
 @json_option
-def command(dataset_dir, classes, methods, matchers, counts, dense, jobs, out_dir, quick, points, max_targets,
-            seed, geodesic_backend, no_cache, protocol, scheduler, force, as_json):
-    """Landmarks on each null shape, matched to the rest of its class; a Markdown and HTML report."""
+def command(dataset_dir, **o):
+    """Landmarks on each null shape, matched to the rest of its class; a Markdown and HTML report.
+
+    N defaults to 400 samples per shape, 200 with --quick.
+    """
     t0 = time.perf_counter()
-    counts = tuple(_counts(counts))
-    with runner(jobs, scheduler) as run:  # one cluster for every stage of the evaluation
-        ev = evaluate(Path(dataset_dir), classes=tuple(_names(classes, what="class")) or None,
-                      methods=tuple(_names(methods, what="method")),
-                      matchers=tuple(_names(matchers, MATCHERS, "matcher")), counts=counts, dense=dense,
-                      n_jobs=jobs, scheduler=run.client, quick=quick, n_points=points, seed=seed,
-                      backend=geodesic_backend, cache=not no_cache, progress=progress_enabled(),
-                      max_targets=max_targets, protocol=protocol, force=force)
-    report = write_report(ev, out_dir)
+    lists = dict(classes=tuple(_names(o["classes"], what="class")) or None,
+                 methods=tuple(_names(o["methods"], what="method")),
+                 matchers=tuple(_names(o["matchers"], MATCHERS, "matcher")), counts=tuple(_counts(o["counts"])))
+    with runner(o["jobs"], o["scheduler"]) as run:  # one cluster for every stage of the evaluation
+        ev = evaluate(Path(dataset_dir), **lists, dense=o["dense"], n_jobs=o["jobs"], scheduler=run.client, quick=o["quick"],
+                      n_points=o["points"], seed=o["seed"], backend=o["geodesic_backend"], cache=not o["no_cache"],
+                      progress=progress_enabled(), max_targets=o["max_targets"], protocol=o["protocol"],
+                      force=o["force"])
+    report = write_report(ev, o["out_dir"])
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),
                "protocols": protocols(ev),
                "correlation": correlations(by_protocol(ev, protocols(ev)[0])),
                "correlation_by_protocol": {p: correlations(by_protocol(ev, p)) for p in protocols(ev)}}
-    if as_json:
+    if o["as_json"]:
         emit_json(summary)
     else:
         info(f"wrote {report} ({len(ev.records)} matchings, {summary['seconds']:.0f} s)")

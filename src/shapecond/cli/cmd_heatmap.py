@@ -31,27 +31,28 @@ from .common import (IDS_HELP, Float, api_options, emit_json, fmt, info, json_op
               help="--score scale: distortion level ε [default: the median sample spacing].")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
-def command(input_spec, landmarks, png, html, ply, effort, resolve_fraction, score, epsilon, up, as_json, **kwargs):
+def command(input_spec, **o):
     """The symmetry score with each sample fixed as a landmark, drawn on the shape.
 
     Low values (blue) are good landmarks: fixing them breaks the near-symmetries.
     Samples a witness map already fixes (e.g. on a mirror plane) do not lower it.
     """
+    png, html, ply = o["png"], o["html"], o["ply"]
     if not (png or html):
         raise InputError("give --png FILE or --html FILE (or both) for the heat map")
-    n_points, options = api_options(pop_shape_options(kwargs))
-    result = heatmap(input_spec, parse_ids(landmarks), n_points, effort=effort, resolve_fraction=resolve_fraction,
-                     score=score, epsilon=epsilon, **options)
-    up = up or _up(result.shape)
+    n_points, options = api_options(pop_shape_options(o))
+    result = heatmap(input_spec, parse_ids(o["landmarks"]), n_points, effort=o["effort"],
+                     resolve_fraction=o["resolve_fraction"], score=o["score"], epsilon=o["epsilon"], **options)
+    up = o["up"] or _up(result.shape)
     if png:
         result.plot(path=png, up=up, ply=ply, cmap="turbo")
         info(f"wrote {png}" + (f" and {ply}" if ply else ""))
     if html:
         info(f"wrote {result.to_html(html, up=up, title=result.title())}")
     out = result.to_dict()
-    if as_json:
+    if o["as_json"]:
         emit_json(out)
     else:
-        name = "delta" if score == "scale" else "sigma"
+        name = "delta" if o["score"] == "scale" else "sigma"
         click.echo(f"{name} before: {fmt(out['sigma_before'])}; best landmark: vertex {out['best']} "
                    f"({name} {fmt(out['best_value'])}); {out['seconds']:.1f} s")

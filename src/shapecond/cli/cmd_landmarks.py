@@ -35,39 +35,41 @@ from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, js
               help="Self-contained HTML page of the landmarks in order with their scores.")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
-def command(input_spec, k, method, user_landmarks, scores, effort, score, epsilon, png, ply, html, up, as_json,
-            **kwargs):
+def command(input_spec, k, method, **o):
     """Choose K landmarks and report the symmetry score after each one.
 
     Landmarks are vertex ids of INPUT (rows for a distance matrix), in order; scores
     are the global symmetry score (lower bound with witness) with the first 1, 2, ...
     landmarks fixed: the paper's "vector of symmetry scores".
     """
-    n_points, options = api_options(pop_shape_options(kwargs))
-    user_ids = parse_ids(user_landmarks, "--user-landmarks") if user_landmarks else []
+    n_points, options = api_options(pop_shape_options(o))
+    user_ids = parse_ids(o["user_landmarks"], "--user-landmarks") if o["user_landmarks"] else []
     if method == "user" and not user_ids:
         raise click.UsageError("--method user needs --user-landmarks")
-    result = landmarks(input_spec, k, method, n_points, user_landmarks=user_ids, scores=scores, effort=effort,
-                       score=score, epsilon=epsilon, **options)
-    up = up or _up(result.shape)
-    title = f"{method}: " + ", ".join(f"{v}" for v in result.landmarks)
-    if png:
-        result.plot(path=png, up=up, title=title)
-        info(f"wrote {png}")
-    if ply:
-        _ply(result, ply)
-    if html:
-        info(f"wrote {result.to_html(html, up=up, title=title)}")
+    result = landmarks(input_spec, k, method, n_points, user_landmarks=user_ids, scores=o["scores"],
+                       effort=o["effort"], score=o["score"], epsilon=o["epsilon"], **options)
+    _pictures(result, o, title=f"{method}: " + ", ".join(f"{v}" for v in result.landmarks))
     d = result.to_dict()
-    if as_json:
+    if o["as_json"]:
         emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds", "score")})
-    else:
-        name = "delta" if result.score == "scale" else "sigma"
-        if result.initial_score is not None:
-            click.echo(f"{name} without landmarks: {fmt(result.initial_score)}")
-        for i, (v, s) in enumerate(zip(result.landmarks, result.scores), 1):
-            click.echo(f"{i:3d}  vertex {v:>8d}  {name} after: {fmt(s)}")
-        click.echo(f"{method}, {result.shape.n_samples} samples, {result.seconds:.2f} s")
+        return
+    name = "delta" if result.score == "scale" else "sigma"
+    if result.initial_score is not None:
+        click.echo(f"{name} without landmarks: {fmt(result.initial_score)}")
+    for i, (v, s) in enumerate(zip(result.landmarks, result.scores), 1):
+        click.echo(f"{i:3d}  vertex {v:>8d}  {name} after: {fmt(s)}")
+    click.echo(f"{method}, {result.shape.n_samples} samples, {result.seconds:.2f} s")
+
+
+def _pictures(result, o: dict, title: str) -> None:
+    up = o["up"] or _up(result.shape)
+    if o["png"]:
+        result.plot(path=o["png"], up=up, title=title)
+        info(f"wrote {o['png']}")
+    if o["ply"]:
+        _ply(result, o["ply"])
+    if o["html"]:
+        info(f"wrote {result.to_html(o['html'], up=up, title=title)}")
 
 
 def _up(shape) -> str:

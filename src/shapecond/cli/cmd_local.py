@@ -32,10 +32,10 @@ from .common import IDS_HELP, Float, emit_json, force_option, info, json_option,
               help="Self-contained HTML page of the local score with each vertex fixed (the doubt field).")
 @force_option
 @json_option
-def command(input_spec, landmarks, alpha, energy, zero_tol, heatmap_png, html, force, as_json):
+def command(input_spec, landmarks, html, heatmap_png, as_json, **o):
     """Local symmetry score sqrt(2 / lambda_min) of the energy Hessian, with its zero modes."""
     t0 = time.perf_counter()
-    result = local_score(input_spec, parse_ids(landmarks), alpha=alpha, energy=energy, zero_tol=zero_tol, force=force)
+    result = local_score(input_spec, parse_ids(landmarks), **o)  # alpha, energy, zero_tol, force
     if html:
         info(f"wrote {result.to_html(html)}")
     if heatmap_png:

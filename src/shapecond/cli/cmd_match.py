@@ -14,7 +14,8 @@ import numpy as np
 from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLINGS
 from ..errors import InputError
 from ..output import atomic_open
-from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_option, parse_ids
+from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, SEED_OPTION, Int, emit_json,
+                     force_option, info, json_option, parse_ids, points_option)
 
 
 @click.command("match")
@@ -27,11 +28,9 @@ from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_o
 @click.option("--matcher", type=click.Choice(MATCHERS), default="lh05", show_default=True,
               help="lh05: Leordeanu-Hebert spectral matching of the samples (the paper); faq: seeded graph "
                    "matching of the samples; zoomout: from the landmarks alone (at least 3), by the dense stage.")
-@click.option("--points", "-n", type=Int(3, MAX_POINTS), default=400, show_default=True,
-              help="Farthest-point samples per shape.")
-@click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random choice.")
-@click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
-              show_default=True, help="Geodesic solver.")
+@points_option(400)
+@SEED_OPTION
+@BACKEND_OPTION
 @click.option("--k", "k", type=Int(1, 10_000), default=20, show_default=True,
               help="lh05: candidate target samples per source sample.")
 @click.option("--rounding", type=click.Choice(["greedy", "assignment"]), default="assignment",
@@ -47,8 +46,8 @@ from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_o
               help="How the map reaches every source vertex: zoomout (the sample map extended, then refined by "
                    "ZoomOut on the Laplace-Beltrami bases with the landmarks as anchors), or the plain "
                    "extensions of the sample map (distances: local distance matching; nearest: nearest sample).")
-@click.option("--largest-component", is_flag=True, help="Keep only the largest connected component.")
-@click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
+@LARGEST_COMPONENT_OPTION
+@NO_CACHE_OPTION
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
               help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
 @click.option("--html", type=click.Path(dir_okay=False), default=None,
@@ -58,9 +57,7 @@ from .common import MAX_POINTS, SEED, Int, emit_json, force_option, info, json_o
                    "order) to show the error field.")
 @force_option
 @json_option
-def command(source, target, landmarks_source, landmarks_target, matcher, points, seed,
-            geodesic_backend, k, rounding, refine, samples, dense, largest_component, no_cache, output,
-            html, truth, force, as_json):
+def command(source, target, landmarks_source, landmarks_target, output, **o):
     """Match SOURCE to TARGET with corresponding landmarks fixed; write the dense map.
 
     The map file has one line per SOURCE vertex id (0 .. largest id): the id of
@@ -70,25 +67,25 @@ def command(source, target, landmarks_source, landmarks_target, matcher, points,
     """
     from ..api import match
 
-    if truth is not None and not html:
+    if o["truth"] is not None and not o["html"]:
         raise InputError("--truth is shown by --html; give --html FILE too")
     t0 = time.perf_counter()
-    options = {"k": k, "rounding": rounding, "refine": refine} if matcher == "lh05" else {}
+    lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
     result = match(source, target, parse_ids(landmarks_source, "--landmarks-source"),
-                   parse_ids(landmarks_target, "--landmarks-target"), matcher=matcher, n_points=points, seed=seed,
-                   backend=geodesic_backend, dense=dense, samples=samples, cache=not no_cache, force=force,
-                   largest_component=largest_component, **options)
+                   parse_ids(landmarks_target, "--landmarks-target"), matcher=o["matcher"], n_points=o["points"],
+                   seed=o["seed"], backend=o["geodesic_backend"], dense=o["dense"], samples=o["samples"],
+                   cache=not o["no_cache"], force=o["force"], largest_component=o["largest_component"], **lh05)
     out = Path(output)
     with atomic_open(out) as fh:
         np.savetxt(fh, result.map, fmt="%d")
-    if html:
+    if o["html"]:
         from ..viz.pages import read_truth
 
-        info(f"wrote {result.to_html(html, truth=read_truth(truth))}")
+        info(f"wrote {result.to_html(o['html'], truth=read_truth(o['truth']))}")
     summary = dict(result.summary, source=str(source), target=str(target), output=str(out),
                    seconds=time.perf_counter() - t0)
-    if as_json:
+    if o["as_json"]:
         emit_json(summary)
     else:
-        info(f"wrote {out}: {result.map.size} source vertices matched to {target} ({matcher}, "
+        info(f"wrote {out}: {result.map.size} source vertices matched to {target} ({o['matcher']}, "
              f"{summary['n_landmarks']} landmarks, {summary['seconds']:.1f} s)")

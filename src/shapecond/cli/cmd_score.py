@@ -43,17 +43,16 @@ from .common import IDS_HELP, Float, api_options, emit_json, fmt, info, json_opt
 @click.option("--html", type=click.Path(dir_okay=False), default=None,
               help="Write a self-contained HTML page of the witness maps (turn the shape, hover vertex ids).")
 @json_option
-def command(input_spec, landmarks, exact, upper, time_limit, effort, witness_png, epsilon, scale_witness_png,
-            html, as_json, **kw):
+def command(input_spec, **o):
     """How hard is INPUT to match: σ bracket, κ bracket and the witness map."""
     t0 = time.perf_counter()
-    n_points, options = api_options(pop_shape_options(kw))
-    result = score(input_spec, n_points, landmarks=parse_ids(landmarks), exact=True if exact else "auto", upper=upper,
-                   time_limit=time_limit, effort=effort, epsilon=epsilon, **options)
-    _pictures(result, witness_png, scale_witness_png, html)
+    n_points, options = api_options(pop_shape_options(o))
+    result = score(input_spec, n_points, landmarks=parse_ids(o["landmarks"]), exact=True if o["exact"] else "auto",
+                   upper=o["upper"], time_limit=o["time_limit"], effort=o["effort"], epsilon=o["epsilon"], **options)
+    _pictures(result, o["witness_png"], o["scale_witness_png"], o["html"])
     report = result.to_dict()
     report["seconds"] = time.perf_counter() - t0  # everything, geodesics included
-    if as_json:
+    if o["as_json"]:
         emit_json(report)
     else:
         _print(report, result.score)

@@ -83,18 +83,37 @@ def progress_enabled() -> bool:
     return sys.stderr.isatty()
 
 
+def points_option(default: int | None = None):
+    """``--points/-n N``: farthest-point samples per shape."""
+    shown = {"default": default, "show_default": True} if default is not None else {"default": None}
+    return click.option("--points", "-n", "points", type=Int(3, MAX_POINTS), **shown,
+                        help="Number of farthest-point samples N" +
+                             ("." if default is not None else f" [default: {DEFAULT_POINTS}]."))
+
+
+#: The options several commands share, each declared here once.
+SEED_OPTION = click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random choice.")
+BACKEND_OPTION = click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
+                              show_default=True, help="Geodesic solver (exact needs the 'exact' extra).")
+LARGEST_COMPONENT_OPTION = click.option("--largest-component", is_flag=True,
+                                        help="Keep only the largest connected component.")
+NO_CACHE_OPTION = click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
+
+
+def apply(f, options):
+    """``f`` decorated by ``options`` in the order listed (the first is the first in ``--help``)."""
+    for option in reversed(options):
+        f = option(f)
+    return f
+
+
 def shape_options(f):
     """Options that build the metric shape: --points, --metric, --geodesic-backend, ..."""
-    options = [
-        click.option("--points", "-n", "points", type=Int(3, MAX_POINTS), default=None,
-                     help=f"Number of farthest-point samples N [default: {DEFAULT_POINTS}]."),
+    return apply(f, [
+        points_option(),
         click.option("--metric", type=click.Choice(["geodesic", "euclidean"]), default="geodesic",
                      show_default=True, help="Distance between points."),
-        click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
-                     show_default=True, help="Geodesic solver (exact needs the 'exact' extra)."),
-        click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random choice."),
-        click.option("--largest-component", is_flag=True, help="Keep only the largest connected component."),
-        click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache."),
+        BACKEND_OPTION, SEED_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION,
         click.option("--target", type=click.Choice(["samples", "dense"]), default=None,
                      help="Where maps may send samples: other samples (the paper) or a denser FPS set "
                           "[default: dense for meshes, samples for a distance matrix]."),
@@ -103,10 +122,7 @@ def shape_options(f):
         click.option("--symmetry-map", type=click.Path(dir_okay=False), default=None,
                      help="A .sym file (line i = 1-based id of the mirror of vertex i): sample in mirror pairs."),
         force_option,
-    ]
-    for option in reversed(options):
-        f = option(f)
-    return f
+    ])
 
 
 SHAPE_OPTION_NAMES = ("points", "metric", "geodesic_backend", "seed", "largest_component", "no_cache",

@@ -89,9 +89,46 @@ class MetricShape:
         return np.asarray(out, dtype=np.int64)
 
 
-def build_metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "geodesic", backend: str = "heat",
-                 seed: int = 0, landmarks=(), target: str = "samples", target_factor: int = 8,
-                 cache: bool = True, progress: bool = False, force: bool = False) -> MetricShape:
+@dataclass(frozen=True)
+class Sampling:
+    """How a geometry is sampled into a metric shape (``build_metric_shape``); each field checked here.
+
+    Attributes
+    ----------
+    metric : "geodesic" or "euclidean" (the latter forces ``backend="euclidean"``).
+    backend : geodesic backend, see ``shapecond.shapes.geodesics``.
+    seed : seed of the farthest-point sampling's start.
+    target : "samples" or "dense"; ``target_factor`` gives M = factor x N for dense
+        targets (capped at the vertex count).
+    cache : read and write the on-disk cache.
+    progress : a progress bar on stderr.
+    force : run even when the estimated time or memory is beyond ``shapecond.limits``.
+    """
+
+    metric: str = "geodesic"
+    backend: str = "heat"
+    seed: int = 0
+    target: str = "samples"
+    target_factor: int = 8
+    cache: bool = True
+    progress: bool = False
+    force: bool = False
+
+    def __post_init__(self):
+        if self.metric not in ("geodesic", "euclidean"):
+            raise InputError(f"unknown metric {self.metric!r}; choose geodesic or euclidean")
+        if self.metric == "euclidean":
+            object.__setattr__(self, "backend", "euclidean")
+        elif self.backend not in BACKENDS or self.backend == "euclidean":
+            raise InputError(f"unknown geodesic backend {self.backend!r}; choose heat, fmm or exact")
+        if self.target not in TARGETS:
+            raise InputError(f"unknown target {self.target!r}; choose samples or dense")
+        object.__setattr__(self, "target_factor", check_int(self.target_factor, "target_factor", lo=1, hi=1000))
+        object.__setattr__(self, "seed", check_seed(self.seed))
+
+
+def build_metric_shape(geometry: Geometry, n_points: int = 400, landmarks=(), sampling: Sampling | None = None,
+                       **options) -> MetricShape:
     """Sample a mesh or point cloud into a ``MetricShape`` (landmarks first, FPS order).
 
     Parameters
@@ -99,28 +136,17 @@ def build_metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "g
     geometry : Geometry; its ``symmetry`` map, when set, makes the sampling
         symmetry-consistent (X and Y closed under the map).
     n_points : N, the number of samples.
-    metric : "geodesic" or "euclidean" (the latter forces ``backend="euclidean"``).
-    backend : geodesic backend, see ``shapecond.shapes.geodesics``.
     landmarks : internal vertex indices placed first.
-    target : "samples" or "dense"; ``target_factor`` gives M = factor x N for dense
-        targets (capped at the vertex count).
-    force : run even when the estimated time or memory is beyond ``shapecond.limits``.
+    sampling : a ``Sampling``, or None to make one of ``**options`` (its fields: ``metric``,
+        ``backend``, ``seed``, ``target``, ``target_factor``, ``cache``, ``progress``, ``force``).
     """
-    if metric not in ("geodesic", "euclidean"):
-        raise InputError(f"unknown metric {metric!r}; choose geodesic or euclidean")
-    if metric == "euclidean":
-        backend = "euclidean"
-    elif backend not in BACKENDS or backend == "euclidean":
-        raise InputError(f"unknown geodesic backend {backend!r}; choose heat, fmm or exact")
-    if target not in TARGETS:
-        raise InputError(f"unknown target {target!r}; choose samples or dense")
+    s = sampling if sampling is not None else Sampling(**options)
     n_points = check_int(n_points, "n_points", lo=3)
     if n_points > geometry.n_vertices:
         raise InputError(f"{geometry.name} has {geometry.n_vertices} vertices, fewer than the "
                          f"{n_points} samples requested")
-    target_factor = check_int(target_factor, "target_factor", lo=1, hi=1000)
-    seed = check_seed(seed)
-    m = n_points if target == "samples" else min(n_points * target_factor, geometry.n_vertices)
+    metric, backend, seed, target, cache = s.metric, s.backend, s.seed, s.target, s.cache
+    m = n_points if target == "samples" else min(n_points * s.target_factor, geometry.n_vertices)
     landmarks = tuple(int(v) for v in landmarks)
     key = disk.key_of(CACHE_VERSION, geometry.vertices, geometry.faces, geometry.ids, geometry.symmetry,
                       n_points, m, backend, seed, landmarks)
@@ -131,10 +157,10 @@ def build_metric_shape(geometry: Geometry, n_points: int = 400, metric: str = "g
                            metric, backend, target, float(z["scale"]), z["nearest"].astype(np.int64),
                            float(z["covering_radius"]))
     check_cost(f"sampling {m} points of {geometry.name} ({geometry.n_vertices} vertices, {backend} distances)",
-               geodesic_seconds(geometry.n_vertices, m, backend), metric_bytes(m, geometry.n_vertices), force)
+               geodesic_seconds(geometry.n_vertices, m, backend), metric_bytes(m, geometry.n_vertices), s.force)
     solver = DistanceSolver(geometry, backend)
     fps = farthest_point_sampling(solver, m, landmarks=landmarks, seed=seed, symmetry=geometry.symmetry,
-                                  stops=(n_points,), progress=progress)
+                                  stops=(n_points,), progress=s.progress)
     scale = float(fps.D.max())
     if not scale > 0:
         raise InputError(f"{geometry.name}: zero diameter")

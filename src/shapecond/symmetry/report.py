@@ -97,17 +97,39 @@ def _scale(D, n, lm, epsilon, seed, effort, sc) -> ScaleScore:
     return describe(D, n, fine.witness, lo.epsilon, lm, time.perf_counter() - t0, fine.maps)
 
 
-def score_report(shape, landmark_ids=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                effort="default", force=False, epsilon=None, search=None) -> ScoreReport:
+@dataclass(frozen=True)
+class ScoreSettings:
+    """How ``score_report`` scores a shape.
+
+    Attributes
+    ----------
+    exact : "auto" (exact σ when enumeration is quick), True or False (``score.symmetry_score``).
+    upper : LP upper bound when σ is not exact (``relax``).
+    time_limit : seconds for each of the exact and LP solves.
+    seed, effort : of the witness searches.
+    force : run work beyond ``shapecond.limits``.
+    epsilon : distortion level of δ(ε) (None: ``scale.default_epsilon``, the median sample spacing).
+    """
+
+    exact: object = "auto"
+    upper: bool = False
+    time_limit: float | None = 10.0
+    seed: int = 0
+    effort: str = "default"
+    force: bool = False
+    epsilon: float | None = None
+
+
+def score_report(shape, landmark_ids=(), settings: ScoreSettings = ScoreSettings(), search=None) -> ScoreReport:
     """Score a ``MetricShape`` whose samples include the landmarks ``landmark_ids`` (input ids).
 
-    ``epsilon``: distortion level of δ(ε) (default ``symmetry.scale.default_epsilon``);
     ``search``: a witness search already run with these landmarks (reused).
     """
+    s = settings
     lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
-    sc = symmetry_score(shape.D, shape.n_points, lm, exact=exact, upper=upper, time_limit=time_limit,
-                        seed=seed, effort=effort, force=force, search=search)
-    res = resolution_for_shape(shape, lm, seed=seed, effort=effort, score=sc)
-    delta = _scale(shape.D, shape.n_points, lm, epsilon, seed, effort, sc)
+    sc = symmetry_score(shape.D, shape.n_points, lm, exact=s.exact, upper=s.upper, time_limit=s.time_limit,
+                        seed=s.seed, effort=s.effort, force=s.force, search=search)
+    res = resolution_for_shape(shape, lm, seed=s.seed, effort=s.effort, score=sc)
+    delta = _scale(shape.D, shape.n_points, lm, s.epsilon, s.seed, s.effort, sc)
     return ScoreReport(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta),
                        tuple(int(v) for v in landmark_ids), delta)

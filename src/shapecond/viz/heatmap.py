@@ -22,10 +22,7 @@ from .render import render_scene
 from .scene import DEFAULT_VIEWS, heatmap_scene, interpolate_to_vertices, shape_points  # noqa: F401
 
 
-def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = None, views=DEFAULT_VIEWS,
-                       method: str = "smooth", cmap: str = "turbo", title: str | None = None,
-                       colorbar_label: str = "σ with the point fixed", ply: str | None = None,
-                       log: bool | None = None, fig=None):
+def render_heatmap_png(shape, values, path, *, landmarks=(), ply: str | None = None, fig=None, **style):
     """Draw a per-sample heat map on the shape (Figure 1/4 style), optionally also as PLY.
 
     Parameters
@@ -37,19 +34,17 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), up: str | None = No
         PNG to write.
     landmarks : sequence of int
         Sample indices already chosen, drawn as markers (first three red, then green).
-    up : {"x", "y", "z"} or None
-        Vertical axis; None guesses it (``render.guess_up``).
     ply : str or None
         Also write a PLY with the interpolated colours there.
-    log : bool or None
-        Colour by log10 of the values; None: when max/min > 20 (e.g. points near a
-        mirror plane keep huge scores and would flatten the rest of the scale).
-        Infinite values are drawn with the largest finite one.
     fig : matplotlib Figure or None
         Draw onto it; with ``path=None`` the Figure is returned (no PNG written).
+    **style : ``up`` (None guesses it, ``scene.guess_up``), ``views``, ``title``, ``method`` ("smooth" or
+        "nearest" interpolation), ``cmap`` (default "turbo"), ``colorbar_label``, and ``log``:
+        colour by log10 of the values; None: when max/min > 20 (e.g. points near a mirror plane
+        keep huge scores and would flatten the rest of the scale).  Infinite values are drawn
+        with the largest finite one.
     """
-    scene = heatmap_scene(shape, values, landmarks=landmarks, up=up, views=views, method=method, cmap=cmap,
-                          title=title, colorbar_label=colorbar_label, log=log)
+    scene = heatmap_scene(shape, values, landmarks=landmarks, **style)
     out = render_scene(path, scene, fig=fig)
     if ply is not None:
         layer = scene.layers[0]  # the PNG's colours, in the input's coordinates

@@ -24,8 +24,7 @@ def scalar_colours(values, cmap: str = "viridis", vmin=None, vmax=None) -> np.nd
     return np.round(rgba * 255).astype(np.uint8)
 
 
-def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, cmap="viridis",
-              vmin=None, vmax=None, ring: bool = True) -> str:
+def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, ring: bool = True, **colouring) -> str:
     """Write a PLY with per-vertex colours.
 
     Parameters
@@ -39,6 +38,7 @@ def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, cmap="vi
         Internal vertex indices in order; painted red (first three) and green (rest).
     ring : bool
         Also paint the landmarks' neighbouring vertices (meshes only).
+    **colouring : ``cmap`` (default "viridis"), ``vmin``, ``vmax`` of scalar values.
 
     Returns
     -------
@@ -56,7 +56,7 @@ def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, cmap="vi
         if v.ndim == 1:
             if v.shape[0] != n:
                 raise InputError(f"values must have {n} entries, got {v.shape[0]}")
-            colours = scalar_colours(v, cmap, vmin, vmax)
+            colours = scalar_colours(v, colouring.get("cmap", "viridis"), colouring.get("vmin"), colouring.get("vmax"))
         elif v.ndim == 2 and v.shape[0] == n and v.shape[1] in (3, 4):
             c = v.astype(float)
             if v.dtype.kind == "f":

@@ -22,6 +22,8 @@ Values are either scalars ``(n,)`` mapped through a colour map, or colours
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import matplotlib
 import numpy as np
 from matplotlib.collections import PolyCollection
@@ -102,26 +104,34 @@ def _draw_view(ax, scene: Scene, layer, R, fnormals, labels):
     ax.axis("off")
 
 
-def render_png(
-    path,
-    vertices,
-    faces=None,
-    values=None,
-    landmarks=(),
-    *,
-    views=DEFAULT_VIEWS,
-    up: str = "z",
-    title: str | None = None,
-    cmap: str = "viridis",
-    vmin: float | None = None,
-    vmax: float | None = None,
-    colorbar_label: str | None = None,
-    point_size: float = 6.0,
-    labels: bool = True,
-    extra=None,
-    dpi: int = 110,
-    fig=None,
-):
+@dataclass(frozen=True)
+class Look:
+    """How a picture of a shape is framed and drawn (every keyword of ``render_png`` but the colouring).
+
+    Attributes
+    ----------
+    views : sequence of (elevation, azimuth) in degrees, camera positions around ``up``
+        (``view_rotation``).
+    up : {"x", "y", "z"}, the data's vertical axis (TOSCA meshes: ``"z"``).
+    title : the figure's title.
+    point_size : marker size of a point cloud.
+    labels : number the landmarks.
+    dpi : resolution of the PNG.
+    """
+
+    views: tuple = DEFAULT_VIEWS
+    up: str = "z"
+    title: str | None = None
+    point_size: float = 6.0
+    labels: bool = True
+    dpi: int = 110
+
+
+#: Keywords of ``render_png`` that colour the shape (one row of ``render_rows``); the others make a ``Look``.
+COLOURING = ("cmap", "vmin", "vmax", "colorbar_label", "extra")
+
+
+def render_png(path, vertices, faces=None, values=None, landmarks=(), *, fig=None, **options):
     """Render a shape from several views into one PNG (written atomically), or onto a Figure.
 
     Parameters
@@ -137,51 +147,45 @@ def render_png(
         Vertex indices (internal, 0-based) in selection order; the first three are
         drawn red, the rest green (paper Figure 6), numbered from 1.  Landmarks on
         the far side of a view are drawn as hollow circles.
-    views : sequence of (elevation, azimuth) in degrees
-        Camera positions around the ``up`` axis (see ``view_rotation``).
-    up : {"x", "y", "z"}
-        The data's vertical axis (TOSCA meshes: ``"z"``).
-    extra : callable or None
-        ``extra(ax, project)`` is called for every view after the shape is drawn,
-        with ``project(points (k, 3)) -> (k, 3)`` taking points in the input's
-        coordinates to screen x, screen y and depth; used by the witness picture.
-
     fig : matplotlib Figure or None
         Draw onto this Figure; with ``path=None`` the Figure (``fig`` or a new
         one) is returned instead of writing a file.
+    **options : the colouring, ``cmap`` (default "viridis"), ``vmin``, ``vmax``,
+        ``colorbar_label`` and ``extra`` (``extra(ax, project)`` is called for every
+        view after the shape is drawn, with ``project(points (k, 3)) -> (k, 3)``
+        taking points in the input's coordinates to screen x, screen y and depth;
+        used by the witness picture), and the fields of ``Look``.
 
     Returns
     -------
     str (the path written) or Figure (``path=None``)
     """
-    row = dict(values=values, landmarks=landmarks, extra=extra, cmap=cmap, vmin=vmin,
-               vmax=vmax, colorbar_label=colorbar_label, label=None)
-    return render_rows(path, vertices, faces, [row], views=views, up=up, title=title,
-                       point_size=point_size, labels=labels, dpi=dpi, fig=fig)
+    row = dict(values=values, landmarks=landmarks, cmap="viridis", label=None)
+    row.update({k: options.pop(k) for k in COLOURING if k in options})
+    return render_rows(path, vertices, faces, [row], fig=fig, **options)
 
 
-def render_rows(path, vertices, faces, rows, *, views=DEFAULT_VIEWS, up: str = "z",
-                title: str | None = None, point_size: float = 6.0, labels: bool = True,
-                dpi: int = 110, fig=None):
+def render_rows(path, vertices, faces, rows, *, fig=None, **look):
     """Several colourings of one shape, one row of views each, in one PNG (or Figure).
 
     ``rows`` is a list of dicts with the keys of ``render_png`` (``values``,
     ``landmarks``, ``extra``, ``cmap``, ``vmin``, ``vmax``, ``colorbar_label``) and
     ``label`` (a caption written left of the row).  Each row with scalar values gets
-    its own colour bar.  With ``path=None`` the Figure is returned (see ``render_png``).
+    its own colour bar.  ``look``: the fields of ``Look``.  With ``path=None`` the
+    Figure is returned (see ``render_png``).
     """
-    fig = draw_rows(fig, vertices, faces, rows, views=views, up=up, title=title, point_size=point_size,
-                    labels=labels)
-    return fig if path is None else save_figure(fig, path, dpi)
+    look = Look(**look)
+    fig = draw_rows(fig, vertices, faces, rows, look)
+    return fig if path is None else save_figure(fig, path, look.dpi)
 
 
-def draw_rows(fig, vertices, faces, rows, *, views=DEFAULT_VIEWS, up: str = "z", title: str | None = None,
-              point_size: float = 6.0, labels: bool = True) -> Figure:
+def draw_rows(fig, vertices, faces, rows, look: Look = Look()) -> Figure:
     """Draw the rows of ``render_rows`` onto ``fig`` (a new Figure when None) and return it."""
     rows = [dict(r) for r in rows]
     extras = [r.pop("extra", None) for r in rows]
-    scene = make_scene(vertices, faces, rows, up=up, views=views, title=title, point_size=point_size)
-    return draw_scene(fig, scene, labels=labels, extras=extras)
+    scene = make_scene(vertices, faces, rows, up=look.up, views=look.views, title=look.title,
+                       point_size=look.point_size)
+    return draw_scene(fig, scene, labels=look.labels, extras=extras)
 
 
 def draw_scene(fig, scene: Scene, *, labels: bool = True, extras=()) -> Figure:

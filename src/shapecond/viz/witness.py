@@ -23,8 +23,7 @@ from .render import render_scene
 from .scene import DEFAULT_VIEWS, position_colours, witness_scene  # noqa: F401
 
 
-def render_witness_png(shape, witness, path, *, landmarks=(), up: str | None = None,
-                       views=DEFAULT_VIEWS, max_segments: int = 80, title: str | None = None, fig=None):
+def render_witness_png(shape, witness, path, *, landmarks=(), fig=None, **options):
     """Draw a witness map on its shape (see the module docstring).
 
     Parameters
@@ -39,11 +38,11 @@ def render_witness_png(shape, witness, path, *, landmarks=(), up: str | None = N
     landmarks : sequence of int
         Sample indices fixed by the map, drawn as markers.
     up : {"x", "y", "z"} or None
-        Vertical axis of the data; None guesses it (``render.guess_up``: TOSCA z,
+        Vertical axis of the data; None guesses it (``scene.guess_up``: TOSCA z,
         the generated animal y).
     max_segments : int
-        Number of the longest moves drawn as segments.
-
+        Number of the longest moves drawn as segments (default 80).
+    views, title : as ``render.Look``.
     fig : matplotlib Figure or None
         Draw onto it; with ``path=None`` the Figure is returned, nothing written.
 
@@ -51,6 +50,5 @@ def render_witness_png(shape, witness, path, *, landmarks=(), up: str | None = N
     -------
     str (the path written) or Figure (``path=None``)
     """
-    scene = witness_scene(shape, witness, landmarks=landmarks, up=up, views=views, max_segments=max_segments,
-                          title=title)
+    scene = witness_scene(shape, witness, landmarks=landmarks, **options)
     return render_scene(path, scene, fig=fig)
