@@ -29,8 +29,10 @@ from _results import baseline_src, command_line, git, machine, run_variant, writ
 WORKER = r"""
 import json, math, os, resource, time
 from pathlib import Path
-from shapecond.landmarks import monotone
-from shapecond.landmarks.cnbs import cnbs_landmarks, heat_map
+import importlib, importlib.util
+_SEL = "shapecond.selection" if importlib.util.find_spec("shapecond.selection") else "shapecond.landmarks"  # renamed
+monotone = importlib.import_module(_SEL).monotone
+cnbs_landmarks, heat_map = (getattr(importlib.import_module(_SEL + ".cnbs"), f) for f in ("cnbs_landmarks", "heat_map"))
 from shapecond.shapes.io import load_geometry, read_symmetry_map
 from shapecond.api import metric_shape
 from shapecond.symmetry.scale import budget_of, default_epsilon
@@ -68,7 +70,10 @@ print(json.dumps(dict(rows=rows, vertices=len(g.vertices), n=n, eps=eps,
 #: Compiles the kernels of a variant on a small instance.
 WARM_UP = r"""
 import numpy as np
-from shapecond.landmarks.cnbs import cnbs_landmarks
+import importlib, importlib.util
+_SEL = "shapecond.selection" if importlib.util.find_spec("shapecond.selection") else "shapecond.landmarks"  # renamed
+monotone = importlib.import_module(_SEL).monotone
+cnbs_landmarks, heat_map = (getattr(importlib.import_module(_SEL + ".cnbs"), f) for f in ("cnbs_landmarks", "heat_map"))
 from shapecond.symmetry.scale import budget_of, default_epsilon
 P = np.random.default_rng(0).normal(size=(40, 3))
 D = np.sqrt(((P[:, None] - P[None]) ** 2).sum(-1))

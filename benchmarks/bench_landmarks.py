@@ -33,9 +33,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import machine, peak_rss_mb, write_section  # noqa: E402
 
-from shapecond.landmarks.cnbs import cnbs_landmarks, full_heat_map, heat_map  # noqa: E402
-from shapecond.landmarks.fps import fps_landmarks  # noqa: E402
-from shapecond.landmarks.pls import pls_landmarks  # noqa: E402
+from shapecond.selection.cnbs import cnbs_landmarks, full_heat_map, heat_map  # noqa: E402
+from shapecond.selection.fps import fps_landmarks  # noqa: E402
+from shapecond.selection.pls import pls_landmarks  # noqa: E402
 from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
 from shapecond.api import metric_shape  # noqa: E402
 from shapecond.shapes.synthetic import animal  # noqa: E402

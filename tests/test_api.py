@@ -45,7 +45,7 @@ NEGATIVE = -(np.ones((5, 5)) - np.eye(5))
 
 
 def _low_level():
-    from shapecond.landmarks.cnbs import heat_map
+    from shapecond.selection.cnbs import heat_map
     from shapecond.symmetry.condition import kappa_probes
     from shapecond.symmetry.exact import exact_sigma
     from shapecond.symmetry.paper_bound import paper_eigen_diagnostic

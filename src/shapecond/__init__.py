@@ -10,7 +10,7 @@ This package is the front door (``shapecond.api``): ``sc.load``, ``sc.info``,
 ``sc.heatmap``, ``sc.kappa``, ``sc.match``, ``sc.SymmetryProblem``, their result
 types, and ``sc.evaluate`` (the paper's evaluation, ``shapecond.evaluation``).
 ``sc.landmarks`` is the function; the landmark methods themselves are imported
-from the subpackage as ``from shapecond.landmarks import ...``.
+from the subpackage as ``from shapecond.selection import ...``.
 """
 
 from ._jit_cache import ensure_writable_cache

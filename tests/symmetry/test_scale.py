@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.distance import cdist
 
-from shapecond.landmarks import monotone, select_landmarks
-from shapecond.landmarks.cnbs import HeatMap, full_heat_map, heat_map
+from shapecond.selection import monotone, select_landmarks
+from shapecond.selection.cnbs import HeatMap, full_heat_map, heat_map
 from shapecond.shapes.metric import from_distance_matrix
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry.scale import budget_of, default_epsilon, resolution, scale_score

@@ -92,7 +92,7 @@ class SymmetryProblem:
                 epsilon: float | None = None) -> HeatMapResult:
         """σ (``score="sigma"``, warm-started from the kept search) or δ(ε) (``score="scale"``)
         with each sample fixed, ``landmarks`` fixed already (paper Figures 1 and 4)."""
-        from ..landmarks.cnbs import RESOLVE_FRACTION, heat_map
+        from ..selection.cnbs import RESOLVE_FRACTION, heat_map
         from ..symmetry.scale import budget_of, default_epsilon
 
         t0 = time.perf_counter()
@@ -119,7 +119,7 @@ class SymmetryProblem:
     def landmarks(self, k: int, method: str = "cnbs", *, fixed=(), scores: bool | None = None,
                   **options) -> LandmarkResult:
         """``k`` new landmarks after ``fixed`` (input ids of samples); CNBS starts from the kept search."""
-        from ..landmarks import check_method_options, select_landmarks
+        from ..selection import check_method_options, select_landmarks
 
         check_method_options(method, options)
         k = check_int(k, "k", lo=0)

@@ -1,7 +1,7 @@
 """What the Python interface returns: the results of the maths with their pictures.
 
 The maths returns plain results (``symmetry.report.ScoreReport``,
-``landmarks.result.LandmarkSelection``, ``deformation.local_score.LocalScore``)
+``selection.result.LandmarkSelection``, ``deformation.local_score.LocalScore``)
 and never imports the pictures.  Here each one becomes a result of the
 interface, the same fields plus:
 
@@ -22,7 +22,7 @@ import numpy as np
 from ..deformation.local_score import LocalScore
 from ..errors import InputError
 from ..jsonable import fmt, jsonable
-from ..landmarks.result import LandmarkSelection
+from ..selection.result import LandmarkSelection
 from ..symmetry.condition import ProbeResult
 from ..symmetry.report import ScoreReport
 

@@ -116,7 +116,7 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     scores : also compute the score after each landmark (always for CNBS; one search each otherwise).
     effort : work of the witness searches.
     **options : the options of ``metric_shape`` (``seed``, ``force``, ``progress``...) and of the method
-        (``landmarks.method_options``: ``score``, ``epsilon``, ``resolve_fraction``...).
+        (``selection.method_options``: ``score``, ``epsilon``, ``resolve_fraction``...).
 
     Returns
     -------
@@ -129,7 +129,7 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     >>> len(result.landmarks), result.method
     (3, 'fps')
     """
-    from ..landmarks import check_method_options
+    from ..selection import check_method_options
 
     opts, method_kw = ShapeOptions.take(options, "landmarks", others=set(options))
     check_method_options(method, method_kw)  # a misspelt option is refused, naming the method's options
@@ -148,7 +148,7 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
 
 
 def _select(shape, k, method, seed, scores, effort, method_kw) -> LandmarkResult:
-    from ..landmarks import select_landmarks
+    from ..selection import select_landmarks
 
     sel = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **method_kw)
     return promote(sel, LandmarkResult)

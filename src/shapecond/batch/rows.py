@@ -48,7 +48,7 @@ class What:
 
 def parse_what(items) -> What:
     """``["score", "local", "landmarks:5:fps"]`` (or one comma-separated string) -> ``What``."""
-    from ..landmarks import METHODS
+    from ..selection import METHODS
 
     if isinstance(items, str):
         items = [items]

@@ -6,7 +6,7 @@ empty cell / ``null``, and an infinite score as ``inf`` / ``"inf"``).  Values
 come from the code paths of the single-shape commands: ``info``
 (``shapes.io.describe_input``), ``score`` (``shapecond.api.score``),
 ``local`` (``deformation.local_score_of_geometry``) and ``landmarks``
-(``landmarks.select_landmarks``).  A row is identified by its file, the file's
+(``selection.select_landmarks``).  A row is identified by its file, the file's
 content hash and the parameters (``KEY``): ``--resume`` skips a shape whose
 key already has a row.
 """

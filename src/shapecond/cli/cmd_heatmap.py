@@ -6,7 +6,7 @@ import click
 
 from ..api import heatmap
 from ..errors import InputError
-from ..landmarks.cnbs import RESOLVE_FRACTION
+from ..selection.cnbs import RESOLVE_FRACTION
 from .cmd_landmarks import _up
 from .common import (IDS_HELP, Float, api_options, emit_json, fmt, info, json_option, parse_ids, pop_shape_options,
                      shape_options)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ..api import landmarks
-from ..landmarks import METHODS, SCORES
+from ..selection import METHODS, SCORES
 from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
                      pop_shape_options, shape_options)
 

@@ -34,7 +34,7 @@ def class_epsilon(null_path, targets, setup: ShapeSetup) -> float:
 def class_scale_task(cls: str, null_path, targets, sets: dict, setup: ShapeSetup) -> dict:
     """A class's deformation level ε (``class_epsilon``) and, at it, δ(ε) (quick search) of each
     landmark set ``sets[method] = (vertices, counts)`` after each count, non-increasing in the count."""
-    from ..landmarks import monotone
+    from ..selection import monotone
     from ..symmetry.scale import scale_score
 
     epsilon = class_epsilon(null_path, targets, setup)

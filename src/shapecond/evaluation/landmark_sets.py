@@ -45,7 +45,7 @@ class ShapeSetup:
 
 def check_method(name: str) -> None:
     """``InputError`` for an unknown landmark method (before any work)."""
-    from ..landmarks import METHODS
+    from ..selection import METHODS
 
     if name not in METHODS:
         raise InputError(f"unknown landmark method {name!r} (choose from {', '.join(METHODS)})")
@@ -73,7 +73,7 @@ def swap_floor(D, n_samples, landmarks) -> float:
 
 def _scores(shape, idx, seed) -> dict:
     """σ, its swap floor and δ(ε) after 1, 3 and all landmarks (δ made non-increasing)."""
-    from ..landmarks import monotone
+    from ..selection import monotone
     from ..symmetry.scale import scale_score
 
     scores, floor, scale = {}, {}, {}

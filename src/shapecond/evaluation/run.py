@@ -41,7 +41,7 @@ class EvaluationOptions:
     Attributes
     ----------
     classes : class names (None: every class folder).
-    methods : landmark methods (``shapecond.landmarks``).
+    methods : landmark methods (``shapecond.selection``).
     matchers : matchers (``matching.pipeline.MATCHERS``).
     protocol : one of ``PROTOCOL_CHOICES`` ("auto": remeshed for classes with ``.vts`` files,
         corresponding otherwise; "both": corresponding and independent).

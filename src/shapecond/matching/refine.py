@@ -36,7 +36,7 @@ import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from shapecond.landmarks.fps import fps_landmarks
+from shapecond.selection.fps import fps_landmarks
 
 from shapecond.matching.consistency import (  # noqa: F401  (re-exported for spectral and tests)
     SUPPORT, Kernel, _f64, _gain_band, _gain_columns, _gain_entry, _gain_near, _gain_row, _k,

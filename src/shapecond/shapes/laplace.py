@@ -16,7 +16,7 @@ singular), in ascending order, with each eigenvector's sign fixed (largest
 entry in magnitude positive) so that the basis is reproducible.
 
 ``DEFAULT_EIGENPAIRS``: ZoomOut's last level (``matching.zoomout``) and the
-prefix the heat kernel signature reads (``landmarks.hks``) come from this one
+prefix the heat kernel signature reads (``selection.hks``) come from this one
 basis.  150: the vertex-to-vertex map recovered from the *true* functional map
 of two independently remeshed 5–8k-vertex shapes of one class by nearest
 neighbours in the spectral embedding reaches the vertex-quantisation floor

@@ -168,7 +168,7 @@ def widest_swap(D, n, free, budget) -> tuple[int, int]:
 class SearchStage:
     """One search space: maps of the n samples into the M points of ``D``.
 
-    Public so that warm-started searches (``landmarks.warm``, CNBS) can run the
+    Public so that warm-started searches (``selection.warm``, CNBS) can run the
     compiled local search from their own starts with the same neighbour lists.
     """
 

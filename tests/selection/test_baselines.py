@@ -5,10 +5,10 @@ import pytest
 import scipy.sparse as sp
 
 from shapecond.errors import InputError
-from shapecond.landmarks import select_landmarks
-from shapecond.landmarks.fps import fps_landmarks
-from shapecond.landmarks.hks import _local_maxima, heat_kernel_signature, hks_landmarks
-from shapecond.landmarks.pls import _entropy, distance_histograms, pls_landmarks
+from shapecond.selection import select_landmarks
+from shapecond.selection.fps import fps_landmarks
+from shapecond.selection.hks import _local_maxima, heat_kernel_signature, hks_landmarks
+from shapecond.selection.pls import _entropy, distance_histograms, pls_landmarks
 from shapecond.shapes.metric import build_metric_shape, from_distance_matrix
 from shapecond.shapes.synthetic import animal
 

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from shapecond.landmarks.cnbs import (HeatMap, best_swap_avoiding, cnbs_landmarks, heat_map, repair_fixing,
+from shapecond.selection.cnbs import (HeatMap, best_swap_avoiding, cnbs_landmarks, heat_map, repair_fixing,
                                       swap_scores)
 from shapecond.symmetry.exact import exact_sigma
 from shapecond.symmetry.objective import map_score

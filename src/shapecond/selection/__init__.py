@@ -23,7 +23,7 @@ import time
 
 from ..errors import InputError
 from ..limits import single_blas_thread
-from .result import LandmarkResult, make_result, sample_of_vertex
+from .result import LandmarkSelection, make_result, sample_of_vertex
 
 METHODS = ("cnbs", "cnbs-scale", "cnbs-local", "fps", "pls", "hks", "user")
 #: Which score follows each landmark: σ (Eq. 5) or δ(ε) (``shapecond.symmetry.scale``).
@@ -124,7 +124,7 @@ def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
 @single_blas_thread
 def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scores: bool | None = None,
                      effort: str = "default", fixed=(), score: str | None = None, epsilon=None,
-                     **kw) -> LandmarkResult:
+                     **kw) -> LandmarkSelection:
     """Choose ``k`` landmarks on ``shape`` with ``method``.
 
     Parameters
@@ -148,7 +148,7 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
 
     Returns
     -------
-    LandmarkResult
+    LandmarkSelection
     """
     check_method_options(method, kw)
     score = score or ("scale" if method == "cnbs-scale" else "sigma")
@@ -184,7 +184,7 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
         verts, sc, initial = _local_landmarks(shape, k, fixed, **kw)
         samples = [sample_of_vertex(shape, v) for v in verts]
         ids = [int(shape.geometry.ids[v]) for v in verts]
-        return LandmarkResult(tuple(ids), tuple(samples), tuple(verts), tuple(float(v) for v in sc), method,
+        return LandmarkSelection(tuple(ids), tuple(samples), tuple(verts), tuple(float(v) for v in sc), method,
                               time.perf_counter() - t0, initial, shape=shape)
     elif method == "fps":
         from .fps import fps_landmarks
@@ -210,5 +210,5 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps, score)
 
 
-__all__ = ["LandmarkResult", "METHODS", "SCORES", "check_method_options", "method_options", "monotone",
+__all__ = ["LandmarkSelection", "METHODS", "SCORES", "check_method_options", "method_options", "monotone",
            "prefix_scores", "select_landmarks"]

@@ -65,10 +65,6 @@ class LandmarkSelection:
         })
 
 
-#: The name the selection had before the Python interface's ``LandmarkResult`` (which adds pictures).
-LandmarkResult = LandmarkSelection
-
-
 def sample_of_vertex(shape, vertex: int) -> int:
     """Sample index (into X) standing for internal vertex ``vertex``.
 

@@ -8,7 +8,7 @@ import sys
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
-from shapecond.landmarks.cnbs import cnbs_landmarks
+from shapecond.selection.cnbs import cnbs_landmarks
 
 from tests.helpers import mirror_pairs_instance
 
@@ -16,7 +16,7 @@ SCRIPT = """
 import json, sys
 sys.path.insert(0, {root!r})
 from tests.helpers import mirror_pairs_instance
-from shapecond.landmarks.cnbs import cnbs_landmarks
+from shapecond.selection.cnbs import cnbs_landmarks
 from shapecond.symmetry.scale import budget_of, default_epsilon
 D = mirror_pairs_instance(120, 7, noise=0.05)
 out = {{}}
