@@ -248,7 +248,7 @@ def test_browser_decimated_page(browser, tmp_path):
     g = generate("sphere", subdivisions=5)
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 2])], ids=np.arange(g.n_vertices) + 100)
     path = tmp_path / "dec.html"
-    H.write_page(path, "decimated", [H.viewer(scene, max_vertices=1500)])
+    path.write_text(H.page("decimated", [H.viewer(scene, max_vertices=1500)]))
     page, errors, requests = _open(browser, path)
     _check(page, errors, requests, path)
     assert "decimated" in page.locator(".sc-notes").inner_text()

@@ -69,11 +69,6 @@ SEED = Seed()
 MAX_POINTS = 100_000
 
 
-def error(message: str):
-    """Stop with one ``error: message`` line and exit status 2."""
-    raise InputError(message)
-
-
 def info(message: str) -> None:
     """A diagnostic line on stderr (stdout is kept for results)."""
     click.echo(message, err=True)

@@ -101,11 +101,6 @@ class DenseMatch:
     target: SampledSurface | None
     info: dict = field(default_factory=dict)
 
-    @property
-    def sample_vertex_map(self) -> np.ndarray:
-        """(N,) internal target vertex of each source sample (the sample map in vertex ids)."""
-        return self.target.samples[self.sample_map.t]
-
 
 def match_samples(D_source, D_target, landmarks_source, landmarks_target, matcher: str = "lh05",
                   seed: int = 0, **options) -> SampleMatch:

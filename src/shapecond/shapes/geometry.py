@@ -39,6 +39,11 @@ class Geometry:
     name: str = "shape"
     symmetry: np.ndarray | None = field(default=None)
 
+    def __repr__(self) -> str:
+        kind = f"{self.faces.shape[0]} faces" if self.faces is not None else "point cloud"
+        return (f"Geometry({self.name!r}, {self.n_vertices} vertices, {kind}"
+                + (", with a symmetry map)" if self.symmetry is not None else ")"))
+
     @property
     def is_mesh(self) -> bool:
         return self.faces is not None
@@ -79,6 +84,3 @@ class Geometry:
             raise InputError("symmetry map refers to vertex ids out of range")
         internal = self.to_internal(sym[self.ids])
         return Geometry(self.vertices, self.faces, self.ids, self.name, internal)
-
-    def bounding_box(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.vertices.min(axis=0), self.vertices.max(axis=0)

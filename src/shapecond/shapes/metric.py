@@ -61,6 +61,11 @@ class MetricShape:
     nearest: np.ndarray | None = None
     covering_radius: float | None = None
 
+    def __repr__(self) -> str:
+        name = self.geometry.name if self.geometry is not None else "a distance matrix"
+        return (f"MetricShape({name!r}, N={self.n_samples}, M={self.n_targets}, {self.metric}"
+                f"{f' ({self.backend})' if self.backend else ''}, target={self.target}, diameter={self.scale:.4g})")
+
     @property
     def n_points(self) -> int:
         return self.n_samples
@@ -201,12 +206,3 @@ def from_distance_matrix(D: np.ndarray, landmarks=(), name: str = "matrix") -> M
                        None, "samples", scale)
 
 
-def restrict_targets(shape: MetricShape, n_targets: int) -> MetricShape:
-    """The same samples with only the first ``n_targets`` points of Y as targets.
-
-    FPS is prefix-consistent, so this equals sampling with fewer targets; the
-    covering radius is then unknown (None) and D keeps the scale of the full Y.
-    """
-    k = max(shape.n_samples, min(int(n_targets), shape.n_targets))
-    return replace(shape, D=shape.D[:k, :k], samples=shape.samples[:k], nearest=None, covering_radius=None,
-                   target="samples" if k == shape.n_samples else shape.target)

@@ -210,13 +210,6 @@ def page(title: str, body) -> str:
         f"<script>{asset('viewer.js')}</script>", "</body></html>", ""])
 
 
-def write_page(path, title: str, body) -> str:
-    """Write ``page(title, body)`` to ``path`` with the atomic writer; return the path."""
-    from ..output import write_text
-
-    return str(write_text(path, page(title, body)))
-
-
 def inline(document: str, height: int = 640) -> str:
     """A page as an ``<iframe srcdoc>`` for Jupyter's ``_repr_html_`` (its scripts stay in the frame)."""
     if not isinstance(document, str) or "<html" not in document:
