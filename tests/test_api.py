@@ -215,3 +215,28 @@ def test_lh05s_affinity_is_in_the_estimate_and_refused_before_the_geodesics(monk
     assert lh05_affinity_bytes(1425, 12) < MAX_AFFINITY_BYTES < lh05_affinity_bytes(1425, 3)
     with pytest.raises(sc.TooLargeError, match="affinity"):
         sc.match(big, big, list(range(12)), list(range(12)), n_points=1425, cache=False)
+
+
+def _points_matrix(n: int) -> np.ndarray:
+    from scipy.spatial.distance import cdist
+
+    P = np.random.default_rng(0).random((n, 3))
+    return cdist(P, P)
+
+
+def test_landmarks_and_heatmap_refuse_an_over_budget_request_unless_forced(monkeypatch):
+    from shapecond.selection import cnbs
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("the search started before the cost check")
+
+    monkeypatch.setattr(cnbs, "heat_map", no_work)
+    monkeypatch.setattr(cnbs, "cnbs_landmarks", no_work)
+    D = _points_matrix(600)
+    with pytest.raises(sc.TooLargeError, match=r"cnbs with 200 landmarks at N = 600 would take about .* force=True"):
+        sc.landmarks(D, 200, "cnbs")
+    with pytest.raises(AssertionError, match="before the cost check"):  # forced: the work starts
+        sc.landmarks(D, 200, "cnbs", force=True)
+    big = _points_matrix(2800)
+    with pytest.raises(sc.TooLargeError, match=r"heat map at N = 2800"):
+        sc.heatmap(big)

@@ -76,7 +76,7 @@ def _loaded(x, largest_component: bool, force: bool):
                      "(V, F), an (n, 3) array or a distance matrix")
 
 
-def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool = False):
+def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool = False, **unknown):
     """The input ``x`` as a validated ``Geometry`` (mesh or point cloud) or distance matrix.
 
     Parameters
@@ -96,6 +96,7 @@ def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool =
     >>> sc.load(np.random.default_rng(0).random((50, 3))).n_vertices
     50
     """
+    refuse_unknown(unknown, "load")
     loaded = _loaded(x, largest_component, force)
     if symmetry_map is not None:
         if not isinstance(loaded, Geometry):
@@ -105,7 +106,7 @@ def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool =
     return loaded
 
 
-def info(x) -> dict:
+def info(x, **unknown) -> dict:
     """What is in the file ``x`` and what is wrong with it (what ``shapecond info --json`` prints).
 
     Keys: input, kind, n_vertices, n_faces, components, boundary_edges,
@@ -118,6 +119,7 @@ def info(x) -> dict:
     >>> report["kind"], report["problems"]
     ('mesh', [])
     """
+    refuse_unknown(unknown, "info")
     if not isinstance(x, (str, Path)):
         raise InputError("info() describes a file: give its path (or a demo:NAME specification)")
     return describe_input(str(x))

@@ -11,7 +11,7 @@ from ..checks import check_float, check_int, check_seed, parse_ids
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import shape_of
 from ..checks import check_choice
-from .options import EFFORTS, ShapeOptions
+from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, LandmarkResult, ScoreResult, promote
 
 
@@ -74,11 +74,12 @@ class SymmetryProblem:
         return self._searches[key]
 
     def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = 10.0,
-              epsilon: float | None = None) -> ScoreResult:
+              epsilon: float | None = None, **unknown) -> ScoreResult:
         """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search."""
         from ..symmetry.report import ScoreSettings, score_report
         from ..symmetry.score import check_exact
 
+        refuse_unknown(unknown, "SymmetryProblem.score")
         ids = parse_ids(landmarks)
         check_exact(exact)
         if epsilon is not None:
@@ -89,12 +90,13 @@ class SymmetryProblem:
         return promote(report, ScoreResult)
 
     def heatmap(self, landmarks=(), *, resolve_fraction: float | None = None, score: str = "sigma",
-                epsilon: float | None = None) -> HeatMapResult:
+                epsilon: float | None = None, **unknown) -> HeatMapResult:
         """σ (``score="sigma"``, warm-started from the kept search) or δ(ε) (``score="scale"``)
         with each sample fixed, ``landmarks`` fixed already (paper Figures 1 and 4)."""
         from ..selection.cnbs import RESOLVE_FRACTION, heat_map
         from ..symmetry.scale import budget_of, default_epsilon
 
+        refuse_unknown(unknown, "SymmetryProblem.heatmap")
         t0 = time.perf_counter()
         ids = parse_ids(landmarks)
         L = list(self._indices(ids))

@@ -20,7 +20,7 @@ from ..errors import InputError
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import load, require_mesh, shape_of
 from ..checks import check_choice, check_flag
-from .options import EFFORTS, ShapeOptions
+from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 
 #: Largest N of κ probes beyond the landmarks (exact matching enumerates every map).
@@ -77,7 +77,7 @@ def _score_settings(upper, time_limit, effort, epsilon) -> dict:
 
 
 def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs", zero_tol: float | None = None,
-                force: bool = False) -> LocalResult:
+                force: bool = False, **unknown) -> LocalResult:
     """Local symmetry score σ_∞ = sqrt(2/λ_min) of deformation-based matching (paper Section 5).
 
     ``x`` must be a triangle mesh; ``landmarks`` are vertex ids of the input.
@@ -93,6 +93,7 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
 
     from ..deformation.local_score import ZERO_TOL, LocalProblem
 
+    refuse_unknown(unknown, "local_score")
     t0 = time.perf_counter()
     g = require_mesh(load(x, force=force))
     zero_tol = ZERO_TOL if zero_tol is None else zero_tol
