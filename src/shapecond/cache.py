@@ -180,8 +180,8 @@ def load_arrays(kind: str, key: str, shapes: dict, check=None) -> dict | None:
     path = _path(kind, key, ".npz")
     if not os.path.lexists(path):
         return None
-    try:
-        secret = cache_secret()
+
+    def read(secret) -> dict:
         with _open_entry(path) as fh, np.load(fh, allow_pickle=False) as z:
             arrays = {name: z[name] for name in z.files}
         stored_key = str(arrays.pop("__key__", ""))
@@ -196,10 +196,19 @@ def load_arrays(kind: str, key: str, shapes: dict, check=None) -> dict | None:
                 raise ValueError(f"array {name!r} is missing or has the wrong shape")
         if check is not None:
             check(arrays)
-    except Exception as exc:  # a damaged entry may fail in any way: it only costs time
+        return arrays
+
+    return _verified(path, read)
+
+
+def _verified(path: Path, read):
+    """``read(secret)``, or None with a warning when the entry is damaged, forged or another input's:
+    a bad entry may fail in any way and only costs the time to recompute it."""
+    try:
+        return read(cache_secret())
+    except Exception as exc:  # noqa: BLE001
         _warn(f"ignoring cache entry {path.name}: {exc}; recomputing")
         return None
-    return arrays
 
 
 def save_arrays(kind: str, key: str, arrays: dict) -> None:
@@ -221,8 +230,8 @@ def load_json(kind: str, key: str, check=None):
     path = _path(kind, key, ".json")
     if not os.path.lexists(path):
         return None
-    try:
-        secret = cache_secret()
+
+    def read(secret):
         with _open_entry(path) as fh:
             entry = json.loads(fh.read().decode("utf-8"))
         if not isinstance(entry, dict) or entry.get("key") != key:
@@ -232,10 +241,9 @@ def load_json(kind: str, key: str, check=None):
             raise ValueError("its keyed checksum does not match its content (edited, or written by another cache)")
         if check is not None:
             check(payload)
-    except Exception as exc:  # a damaged entry may fail in any way: it only costs time
-        _warn(f"ignoring cache entry {path.name}: {exc}; recomputing")
-        return None
-    return payload
+        return payload
+
+    return _verified(path, read)
 
 
 def save_json(kind: str, key: str, payload) -> None:
