@@ -46,7 +46,7 @@ def test_isometry_gives_inf_everywhere_and_valid_json():
     sc = symmetry_score(near_symmetric_instance(np.random.default_rng(6), 14, 3, 0.0))
     assert sc.sigma_lower == sc.sigma_upper == sc.sigma_exact == math.inf
     assert sc.kappa_upper == math.inf and sc.upper_method == "isometry"
-    from shapecond.cli.common import jsonable
+    from shapecond.jsonable import jsonable
 
     text = json.dumps(jsonable(sc.to_dict()), allow_nan=False)
     d = json.loads(text)
