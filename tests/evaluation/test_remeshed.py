@@ -97,3 +97,15 @@ def test_landmarks_off_every_reference_point_go_through_the_nearest_one():
     ref_t = np.array([5, 6, 7])               # ... and where they are on the target
     # vertex 60 is a reference point; vertex 61 (its neighbour) is not: it goes through 60
     np.testing.assert_array_equal(landmark_images([61, 0, 120], ref_s, ref_t, DistanceSolver(g)), [6, 5, 7])
+
+
+def test_two_landmarks_on_one_target_vertex_take_the_nearest_free_reference_point():
+    from shapecond.shapes.geometry import make_geometry
+
+    V, F, uv = _strip(11)
+    g = make_geometry(V, F)
+    ref_s = np.array([0, 60, 61, 120])        # 60 and 61 are neighbours on the source ...
+    ref_t = np.array([5, 6, 6, 7])            # ... that the coarser target merges into vertex 6
+    images = landmark_images([60, 61, 62], ref_s, ref_t, DistanceSolver(g))
+    assert images[0] == 6 and len(set(images.tolist())) == 3        # a correspondence: distinct images
+    assert set(images[1:].tolist()) == {5, 7}                        # the nearest reference points still free

@@ -175,8 +175,12 @@ def landmark_images(landmarks, ref_source, ref_target, solver) -> np.ndarray:
     """Target vertex of each source landmark through the reference points (module docstring).
 
     ``ref_source[j]``, ``ref_target[j]``: internal vertex of reference point ``j`` on
-    each shape; ``solver``: geodesic rows of the source (used only for landmarks on
-    which no reference point falls).
+    each shape; ``solver``: geodesic rows of the source.  A landmark's image is that of
+    the reference point on it (or nearest to it).  Two landmarks closer than the
+    target's vertex spacing can reach one target vertex that way; the later one then
+    takes the image of the nearest reference point whose target vertex is still free,
+    so that the landmark pairs stay a correspondence (off by at most about one vertex
+    spacing, as the ground truth of a remeshed release is).
     """
     first = {}
     for j, v in enumerate(ref_source.tolist()):
@@ -184,10 +188,11 @@ def landmark_images(landmarks, ref_source, ref_target, solver) -> np.ndarray:
     out = []
     for v in np.asarray(landmarks, dtype=np.int64).tolist():
         j = first.get(v)
-        if j is None:
-            j = int(np.argmin(solver.distances([v])[0][ref_source]))
+        if j is None or int(ref_target[j]) in out:
+            d = solver.distances([v])[0][ref_source]
+            j = next(int(i) for i in np.argsort(d, kind="stable") if int(ref_target[i]) not in out)
         out.append(int(ref_target[j]))
-    if len(set(out)) != len(out):
+    if len(set(out)) != len(out):  # pragma: no cover - the loop above keeps them distinct
         raise InputError("two landmarks of the null shape fall on one target vertex through the ground truth")
     return np.asarray(out, dtype=np.int64)
 
