@@ -100,7 +100,7 @@ def test_landmarks_off_every_reference_point_go_through_the_nearest_one():
 
 
 def test_two_landmarks_on_one_target_vertex_take_the_nearest_free_reference_point():
-    from shapecond.shapes.geometry import make_geometry
+    from shapecond.shapes.validate import make_geometry
 
     V, F, uv = _strip(11)
     g = make_geometry(V, F)
