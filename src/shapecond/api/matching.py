@@ -6,11 +6,13 @@ import inspect
 
 import numpy as np
 
-from ..checks import check_int, check_seed, parse_ids
+from ..checks import check_choice, check_flag, check_int, check_seed, parse_ids
 from ..errors import InputError
+from ..matching.pipeline import MATCHERS, MatchOptions, match_samples, match_shapes
+from ..matching.seeded import faq_match
+from ..matching.spectral import lh05_match
 from .guards import guard_match
 from .inputs import DEFAULT_POINTS, load
-from ..checks import check_choice, check_flag
 from .options import BACKENDS
 from .results import MatchResult
 
@@ -20,10 +22,6 @@ _SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "large
 
 def _matcher_options(matcher: str, options: dict) -> dict:
     """The sample matcher's own options, refused before any work when unknown."""
-    from ..matching.pipeline import MATCHERS
-    from ..matching.seeded import faq_match
-    from ..matching.spectral import lh05_match
-
     check_choice(matcher, "matcher", MATCHERS)
     known = set()
     if matcher != "zoomout":
@@ -36,8 +34,6 @@ def _matcher_options(matcher: str, options: dict) -> dict:
 
 def _match_options(matcher, n_points, dense, samples, options: dict):
     """``MatchOptions`` and the load settings from ``match``'s keywords (each checked once)."""
-    from ..matching.pipeline import MatchOptions
-
     settings = {k: options.pop(k, v) for k, v in _SETTINGS.items()}
     opts = MatchOptions(matcher=matcher, n_points=check_int(n_points, "n_points", lo=3),
                         backend=check_choice(settings["backend"], "backend", BACKENDS),
@@ -48,8 +44,6 @@ def _match_options(matcher, n_points, dense, samples, options: dict):
 
 
 def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
-    from ..matching.pipeline import match_samples
-
     if not (isinstance(src, np.ndarray) and isinstance(tgt, np.ndarray)):
         raise InputError("match two meshes/point clouds or two distance matrices, not one of each")
     if opts.samples != "fps":
@@ -100,8 +94,6 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     >>> r.map.shape[0] == sc.load("demo:animal").n_vertices
     True
     """
-    from ..matching.pipeline import match_shapes
-
     opts, largest, force = _match_options(matcher, n_points, dense, samples, dict(options))
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     if len(ids_s) != len(ids_t):

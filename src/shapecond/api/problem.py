@@ -7,10 +7,15 @@ import time
 
 import numpy as np
 
-from ..checks import check_float, check_int, check_seed, parse_ids
+from ..checks import check_choice, check_float, check_int, check_seed, parse_ids
+from ..selection import check_method_options, select_landmarks
+from ..selection.cnbs import RESOLVE_FRACTION, heat_map
+from ..symmetry.report import ScoreSettings, score_report
+from ..symmetry.scale import budget_of, default_epsilon
+from ..symmetry.score import check_exact
+from ..symmetry.search import witness_search
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import shape_of
-from ..checks import check_choice
 from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, LandmarkResult, ScoreResult, promote
 
@@ -65,8 +70,6 @@ class SymmetryProblem:
 
     def search(self, landmarks=()):
         """The witness search (lower bound of σ with its maps) with ``landmarks`` fixed, kept."""
-        from ..symmetry.search import witness_search
-
         key = tuple(sorted(self._indices(landmarks)))
         if key not in self._searches:
             self._searches[key] = witness_search(self.shape.D, self.shape.n_samples, list(key), seed=self.seed,
@@ -76,9 +79,6 @@ class SymmetryProblem:
     def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = 10.0,
               epsilon: float | None = None, **unknown) -> ScoreResult:
         """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search."""
-        from ..symmetry.report import ScoreSettings, score_report
-        from ..symmetry.score import check_exact
-
         refuse_unknown(unknown, "SymmetryProblem.score")
         ids = parse_ids(landmarks)
         check_exact(exact)
@@ -93,9 +93,6 @@ class SymmetryProblem:
                 epsilon: float | None = None, **unknown) -> HeatMapResult:
         """σ (``score="sigma"``, warm-started from the kept search) or δ(ε) (``score="scale"``)
         with each sample fixed, ``landmarks`` fixed already (paper Figures 1 and 4)."""
-        from ..selection.cnbs import RESOLVE_FRACTION, heat_map
-        from ..symmetry.scale import budget_of, default_epsilon
-
         refuse_unknown(unknown, "SymmetryProblem.heatmap")
         t0 = time.perf_counter()
         ids = parse_ids(landmarks)
@@ -121,8 +118,6 @@ class SymmetryProblem:
     def landmarks(self, k: int, method: str = "cnbs", *, fixed=(), scores: bool | None = None,
                   **options) -> LandmarkResult:
         """``k`` new landmarks after ``fixed`` (input ids of samples); CNBS starts from the kept search."""
-        from ..selection import check_method_options, select_landmarks
-
         check_method_options(method, options)
         k = check_int(k, "k", lo=0)
         L = list(self._indices(fixed))

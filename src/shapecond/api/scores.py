@@ -10,16 +10,21 @@ runs it), and returns a result with pictures (``api.results``).
 
 from __future__ import annotations
 
+from dataclasses import replace
 import sys
 import time
 
 import numpy as np
 
-from ..checks import check_float, check_int, parse_ids
+from ..checks import check_choice, check_flag, check_float, check_int, parse_ids
+from ..deformation.local_score import ZERO_TOL, LocalProblem
 from ..errors import InputError
+from ..selection import check_method_options, select_landmarks
+from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
+from ..symmetry.report import ScoreSettings, score_report
+from ..symmetry.score import check_exact
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import load, require_mesh, shape_of
-from ..checks import check_choice, check_flag
 from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 
@@ -58,9 +63,6 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     >>> result.verdict.startswith("exact symmetry")
     True
     """
-    from ..symmetry.report import ScoreSettings, score_report
-    from ..symmetry.score import check_exact
-
     opts, _ = ShapeOptions.take(options, "score")
     check_exact(exact)
     settings = _score_settings(upper, time_limit, effort, epsilon)
@@ -89,10 +91,6 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     >>> sc.local_score("demo:sphere:subdivisions=2").score   # the sphere's rotations are zero modes
     inf
     """
-    from dataclasses import replace
-
-    from ..deformation.local_score import ZERO_TOL, LocalProblem
-
     refuse_unknown(unknown, "local_score")
     t0 = time.perf_counter()
     g = require_mesh(load(x, force=force))
@@ -130,8 +128,6 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     >>> len(result.landmarks), result.method
     (3, 'fps')
     """
-    from ..selection import check_method_options
-
     opts, method_kw = ShapeOptions.take(options, "landmarks", others=set(options))
     check_method_options(method, method_kw)  # a misspelt option is refused, naming the method's options
     effort = check_choice(effort, "effort", EFFORTS)
@@ -149,8 +145,6 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
 
 
 def _select(shape, k, method, seed, scores, effort, method_kw) -> LandmarkResult:
-    from ..selection import select_landmarks
-
     sel = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **method_kw)
     return promote(sel, LandmarkResult)
 
@@ -179,7 +173,7 @@ def heatmap(x, landmarks=(), n_points: int | None = None, *, effort: str = "defa
     >>> hm.best in hm.samples
     True
     """
-    from .problem import SymmetryProblem
+    from .problem import SymmetryProblem  # problem imports this module's neighbours; a late import keeps them apart
 
     opts, _ = ShapeOptions.take(options, "heatmap")
     problem = SymmetryProblem(x, n_points, landmarks=landmarks, effort=effort, **vars(opts))
@@ -201,8 +195,6 @@ def kappa(x, n_points: int | None = None, *, landmarks=(), trials: int = 20, sca
     >>> r.kappa[0] <= r.kappa_probe_max <= r.kappa[1]
     True
     """
-    from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
-
     opts, _ = ShapeOptions.take(options, "kappa")
     if opts.target == "dense":
         raise InputError("kappa probes match samples to samples: target='dense' does not apply")
