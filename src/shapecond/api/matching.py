@@ -8,7 +8,9 @@ import numpy as np
 
 from ..checks import check_choice, check_flag, check_int, check_seed, parse_ids
 from ..errors import InputError
+from ..matching.error_bar import dense_error_bar
 from ..matching.pipeline import MATCHERS, MatchOptions, match_samples, match_shapes
+from ..matching.sampled import CachedSolver, sample_surface
 from ..matching.seeded import faq_match
 from ..matching.spectral import lh05_match
 from .guards import guard_match
@@ -17,7 +19,8 @@ from .options import BACKENDS
 from .results import MatchResult
 
 #: Keywords of ``match`` besides the matcher's own options.
-_SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "largest_component": False}
+_SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "largest_component": False,
+             "error_bar": True}
 
 
 def _matcher_options(matcher: str, options: dict) -> dict:
@@ -40,7 +43,8 @@ def _match_options(matcher, n_points, dense, samples, options: dict):
                         seed=check_seed(settings["seed"]), dense=dense, samples=samples,
                         cache=check_flag(settings["cache"], "cache"),
                         matcher_options=_matcher_options(matcher, options))
-    return opts, check_flag(settings["largest_component"], "largest_component"), check_flag(settings["force"], "force")
+    flags = {k: check_flag(settings[k], k) for k in ("largest_component", "force", "error_bar")}
+    return opts, flags
 
 
 def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
@@ -79,13 +83,16 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
         map "distances" and "nearest" (``matching.dense``).
     samples : "fps" (each shape its own samples) or "same-ids" (the target sampled at the
         source's sample vertices: shapes with one vertex order; the summary gives the error).
-    **options : ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``, and
-        the sample matcher's own options (lh05: ``k``, ``rounding``, ``refine``...).
+    **options : ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``,
+        ``error_bar`` (default True: also bound the map's error without ground truth,
+        ``matching.error_bar``: δ(2ε̂) on the source, ε̂ the map's own distortion) and the sample
+        matcher's own options (lh05: ``k``, ``rounding``, ``refine``...).
 
     Returns
     -------
     MatchResult: ``.map[i]`` the target id of source id i (-1: a vertex dropped on loading),
-    ``.summary``, ``.to_html()``.
+    ``.summary`` (with ``"error_bar"``), ``.doubt[i]`` (the error bar's doubt field at source id i,
+    sqrt(area) units; NaN for a dropped vertex; None without ``error_bar``), ``.to_html()``.
 
     Examples
     --------
@@ -94,7 +101,8 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     >>> r.map.shape[0] == sc.load("demo:animal").n_vertices
     True
     """
-    opts, largest, force = _match_options(matcher, n_points, dense, samples, dict(options))
+    opts, flags = _match_options(matcher, n_points, dense, samples, dict(options))
+    largest, force = flags["largest_component"], flags["force"]
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     if len(ids_s) != len(ids_t):
         raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
@@ -112,7 +120,22 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
                    samples=opts.samples, matcher_info=m.sample_map.info if m.sample_map is not None else {})
     if opts.samples == "same-ids":
         summary.update(sample_error=m.info["sample_error"], exact=m.info["exact"])
-    return MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)))
+    doubt = None
+    if flags["error_bar"]:
+        bar, field = _error_bar(m, src, tgt, src.to_internal(ids_s), opts)
+        summary["error_bar"] = bar.to_dict()
+        doubt = np.full(lines.size, np.nan)
+        doubt[src.ids] = field
+    return MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)), doubt)
+
+
+def _error_bar(m, src, tgt, landmarks, opts):
+    """``matching.error_bar.dense_error_bar`` on the matcher's samples (sampled here for the zoomout
+    matcher, which has none)."""
+    source = m.source if m.source is not None else sample_surface(src, opts.n_points, opts.backend, opts.seed,
+                                                                  landmarks, opts.cache)
+    solver = CachedSolver(tgt, opts.backend, m.target)
+    return dense_error_bar(source, tgt, m.vertex_map, len(landmarks), opts.seed, solver)
 
 
 __all__ = ["match"]

@@ -218,11 +218,14 @@ class MatchResult(Pictures):
     map : (n,) int64 target id of every source id.
     summary : the JSON summary of ``shapecond match`` (matcher, counts, options).
     drawing : (source Geometry, target Geometry, their landmarks as internal ids), for pictures.
+    doubt : (n,) the error bar's doubt field at every source id (``matching.error_bar``; NaN for a
+        dropped vertex), or None.
     """
 
     map: np.ndarray
     summary: dict
     drawing: tuple = field(default=None, repr=False)
+    doubt: np.ndarray | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         """The summary of ``shapecond match --json`` plus the map itself."""
@@ -235,8 +238,10 @@ class MatchResult(Pictures):
 
     def __repr__(self) -> str:
         s = self.summary
+        bar = s.get("error_bar")
         return (f"MatchResult({s.get('matcher')}, {self.map.size} source ids -> target ids, "
-                f"{s.get('n_landmarks')} landmarks, N={s.get('n_points')})")
+                f"{s.get('n_landmarks')} landmarks, N={s.get('n_points')}"
+                + (f", error bar {bar['delta']:.3g} sqrt(area))" if bar else ")"))
 
 
 __all__ = ["HeatMapResult", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult", "ScoreResult", "promote"]

@@ -46,6 +46,12 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
               help="How the map reaches every source vertex: zoomout (the sample map extended, then refined by "
                    "ZoomOut on the Laplace-Beltrami bases with the landmarks as anchors), or the plain "
                    "extensions of the sample map (distances: local distance matching; nearest: nearest sample).")
+@click.option("--error-bar/--no-error-bar", default=True, show_default=True,
+              help="Bound the map's error without ground truth: δ(2ε̂) on SOURCE with the landmarks fixed, ε̂ the "
+                   "map's own RMS distortion (in the summary, and the doubt field with --doubt-ply).")
+@click.option("--doubt-ply", type=click.Path(dir_okay=False), default=None,
+              help="SOURCE coloured by the error bar's doubt field: how far the widest map as distorted as this "
+                   "one moves each point (PLY).")
 @LARGEST_COMPONENT_OPTION
 @NO_CACHE_OPTION
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
@@ -69,15 +75,20 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
 
     if o["truth"] is not None and not o["html"]:
         raise InputError("--truth is shown by --html; give --html FILE too")
+    if o["doubt_ply"] and not o["error_bar"]:
+        raise InputError("--doubt-ply shows the error bar's doubt field: drop --no-error-bar")
     t0 = time.perf_counter()
     lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
     result = match(source, target, parse_ids(landmarks_source, "--landmarks-source"),
                    parse_ids(landmarks_target, "--landmarks-target"), matcher=o["matcher"], n_points=o["points"],
                    seed=o["seed"], backend=o["geodesic_backend"], dense=o["dense"], samples=o["samples"],
-                   cache=not o["no_cache"], force=o["force"], largest_component=o["largest_component"], **lh05)
+                   cache=not o["no_cache"], force=o["force"], largest_component=o["largest_component"],
+                   error_bar=o["error_bar"], **lh05)
     out = Path(output)
     with atomic_open(out) as fh:
         np.savetxt(fh, result.map, fmt="%d")
+    if o["doubt_ply"]:
+        _write_doubt(result, o["doubt_ply"])
     if o["html"]:
         from ..viz.pages import read_truth
 
@@ -89,3 +100,13 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     else:
         info(f"wrote {out}: {result.map.size} source vertices matched to {target} ({o['matcher']}, "
              f"{summary['n_landmarks']} landmarks, {summary['seconds']:.1f} s)")
+        if "error_bar" in summary:
+            info("error bar: " + summary["error_bar"]["text"])
+
+
+def _write_doubt(result, path) -> None:
+    from ..viz.ply import write_ply
+
+    src = result.drawing[0]  # the doubt field in the source's internal vertex order, landmarks ringed
+    write_ply(path, src.vertices, src.faces, values=result.doubt[src.ids], landmarks=result.drawing[2], cmap="turbo")
+    info(f"wrote {path}")

@@ -44,6 +44,7 @@ from ..errors import InputError
 from ..matching import refine
 from ..matching.candidates import recall
 from ..matching.metrics import errors_from_rows, normalise
+from ..matching.error_bar import dense_error_bar, error_bar
 from ..matching.pipeline import (SAMPLE_MATCHERS, MatchOptions, match_landmarks_only, match_samples,
                                  match_surfaces)
 from ..matching.sampled import (CachedSolver, carry_samples, insert_landmarks, sample_surface, surface_at,
@@ -149,7 +150,9 @@ def _corresponding_cell(source, g, lm, matcher, solvers, seed):
     carried, truth = carry_samples(src, g, solvers[1], seed)
     sm = match_samples(src.D, carried.D, ls, truth[ls], matcher, seed=seed)
     raw = errors_from_rows(carried.rows[truth], carried.samples[sm.t])
-    extra = {"exact": float(np.mean(sm.t == truth))}
+    eps_hat = float(np.linalg.norm(src.D - carried.D[np.ix_(sm.t, sm.t)]) / src.n_samples)  # the map's own
+    extra = {"exact": float(np.mean(sm.t == truth)), "epsilon_hat": eps_hat,
+             "bar": error_bar(src, len(ls), eps_hat, seed).delta}
     if sm.candidates is not None:
         extra["recall"] = recall(sm.candidates, truth)
     if "h" in sm.info:
@@ -166,7 +169,16 @@ def _independent_cell(source, tgt, lm, options: MatchOptions, solvers):
         m = match_landmarks_only(source.geometry, tgt.geometry, lm, lm, options, solvers)
         raw_s = None
     # evaluation points: the target's own samples (same ids on the source)
-    return errors_from_rows(tgt.rows, m.vertex_map[tgt.samples]), raw_s, {}
+    return (errors_from_rows(tgt.rows, m.vertex_map[tgt.samples]), raw_s,
+            bar_fields(m, source, tgt.geometry, lm, solvers, options.seed))
+
+
+def bar_fields(m, source, target_geometry, landmarks, solvers, seed) -> dict:
+    """``epsilon_hat`` and ``bar`` of a dense map (``matching.error_bar.dense_error_bar``, sqrt(area) units),
+    on the matcher's samples, or on ``source`` with the landmarks inserted first (the zoomout matcher)."""
+    surface = m.source if m.source is not None else insert_landmarks(source, landmarks, solvers[0])[0]
+    bar, _ = dense_error_bar(surface, target_geometry, m.vertex_map, len(landmarks), seed, solvers[1])
+    return {"epsilon_hat": bar.epsilon_hat, "bar": bar.delta}
 
 
 # --- the remeshed protocol ------------------------------------------------------------------------
@@ -245,11 +257,11 @@ def _remeshed(cls, target_path, landmark_sets, setup: MatchingSetup, load) -> li
         raise InputError(f"{cls.name}: {cls.null.stem} has {ref_s.size} reference points but {g.name} has "
                          f"{ref_t.size}")
     sampled = any(m in SAMPLE_MATCHERS for m in setup.matchers)
-    src = sample_surface(null, s.n_points, s.backend, s.seed, cache=s.cache) if sampled else None
+    src = sample_surface(null, s.n_points, s.backend, s.seed, cache=s.cache)  # also the error bars' samples
     tgt = sample_surface(g, s.n_points, s.backend, s.seed, cache=s.cache) if sampled else None
     solvers = (CachedSolver(null, s.backend, src), CachedSolver(g, s.backend, tgt))
     images = {m: landmark_images(lm, ref_s, ref_t, solvers[0]) for m, lm in landmark_sets.items()}
-    maps, seconds = {}, {}
+    maps, seconds, bars = {}, {}, {}
     for cell in _cells(landmark_sets, setup, setup.matchers):
         method, c, matcher = cell
         t0 = time.perf_counter()
@@ -259,6 +271,7 @@ def _remeshed(cls, target_path, landmark_sets, setup: MatchingSetup, load) -> li
         else:
             m = match_landmarks_only(null, g, ls, lt, setup.options(matcher), solvers)
         maps[cell], seconds[cell] = m.vertex_map[ref_s], time.perf_counter() - t0
+        bars[cell] = bar_fields(m, src, g, ls, solvers, s.seed)
     sym = reference_symmetry(cls, ref_t.size)
     raw, diameter, mirror = reference_errors(g, ref_t, maps, s.backend, sym)
     unit = surface_unit(g, diameter)
@@ -268,5 +281,5 @@ def _remeshed(cls, target_path, landmark_sets, setup: MatchingSetup, load) -> li
         flipped = float(e.mean() > 0.5 * mirror) if sym is not None else math.nan
         out.append(MatchRecord(cls.name, g.name, method, c, matcher, float(err.mean()), float(e.mean() / unit),
                                math.nan, seconds[(method, c, matcher)], curve_points(err), "remeshed",
-                               flipped=flipped))
+                               flipped=flipped, **bars[(method, c, matcher)]))
     return out

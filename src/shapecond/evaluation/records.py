@@ -26,6 +26,9 @@ class MatchRecord:
     exact, recall, objective_ratio : corresponding protocol (module ``protocols``).
     flipped : remeshed protocol with a reference symmetry: 1.0 when the mean error exceeds half
         the mean distance between mirror images (a left–right flip), else 0.0; NaN otherwise.
+    epsilon_hat : RMS distortion of the map itself on the null shape's samples, sqrt(area) units
+        (``matching.error_bar``: read without ground truth).
+    bar : the map's error bar δ(2ε̂) in units of sqrt(area) (``matching.error_bar``).
     """
 
     cls: str
@@ -43,9 +46,11 @@ class MatchRecord:
     recall: float = math.nan
     objective_ratio: float = math.nan
     flipped: float = math.nan
+    epsilon_hat: float = math.nan
+    bar: float = math.nan
 
     FIELDS = ("cls", "target", "method", "n_landmarks", "matcher", "protocol", "error", "error_area",
-              "sample_error", "exact", "recall", "objective_ratio", "flipped", "seconds")
+              "sample_error", "exact", "recall", "objective_ratio", "flipped", "epsilon_hat", "bar", "seconds")
 
     def to_dict(self) -> dict:
         return jsonable({k: getattr(self, k) for k in self.FIELDS})

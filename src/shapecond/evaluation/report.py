@@ -193,7 +193,17 @@ def _error_sections(ev, protocol, scores) -> list[str]:
             out += ["", f"Spearman rank correlation between the score {name} and error ({matcher}, {n} "
                     f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}; within classes "
                     f"(mean of per-class ρ over {nw} classes): {_fmt(rw)}."]
-    cols = ("error_area", "sample_error", "exact", "recall", "objective_ratio", "flipped")
+    out += ["", f"## Error bars without ground truth, {protocol} protocol", "",
+            "Each matching's bar is δ(2ε̂) on the null shape with its landmarks, ε̂ the RMS distortion of the "
+            "map itself (`matching.error_bar`); both bar and error in units of sqrt(area). Held: the share of "
+            "matchings whose error is at most their bar; ratio: the median of bar / error; ρ: Spearman between "
+            "bar and error over the matchings, pooled and within classes.", "",
+            "| matcher | matchings | held | median bar / error | ρ pooled | ρ within class |", "|---|---|---|---|---|---|"]
+    for matcher in st["matchers"]:
+        b = bar_calibration([r for r in ev.records if r.matcher == matcher])
+        out.append(f"| {matcher} | {b['n']} | {_fmt(b['held'])} | {_fmt(b['median_ratio'])} | {_fmt(b['rho'])} | "
+                   f"{_fmt(b['within_class'])} |")
+    cols = ("error_area", "sample_error", "exact", "recall", "objective_ratio", "flipped", "epsilon_hat", "bar")
     tables = {c: mean_errors(ev.records, c) for c in cols}
     pct = mean_errors(ev.records, "error")
     out += ["", f"## Other measures, {protocol} protocol", "",
@@ -202,7 +212,7 @@ def _error_sections(ev, protocol, scores) -> list[str]:
             "the true map's (corresponding samples only); the fraction of targets matched flipped "
             "(remeshed classes with a reference symmetry).", "",
             "| class | method | matcher | L | % half diam. | / sqrt(area) | sample map % | exact | "
-            "recall | objective / truth | flipped |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+            "recall | objective / truth | flipped | ε̂ | bar |", "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for cell in sorted(pct):
         cls, m, c, matcher = cell
         out.append(f"| {cls} | {m} | {matcher} | {c} | {_fmt(pct[cell])} | "
@@ -283,16 +293,40 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
 
 
 def correlations(ev) -> dict:
-    """{matcher: {rho, p, n, within_class, scale: {...}, scale_class: {...}}}: ``correlation``
-    and ``within_class`` of σ, and the same for δ(ε) at the sample spacing (``scale``) and at
-    each class's own deformation level (``scale_class``)."""
+    """{matcher: {rho, p, n, within_class, scale: {...}, scale_class: {...}, bars: {...}}}:
+    ``correlation`` and ``within_class`` of σ, of δ(ε) at the sample spacing (``scale``) and at each
+    class's own deformation level (``scale_class``), and the calibration of the per-matching error
+    bars (``bar_calibration``)."""
     out = {}
     for m in ev.settings["matchers"]:
         out[m] = dict(zip(("rho", "p", "n"), correlation(ev, m)), within_class=within_class(ev, m)[0])
         for key in ("scale", "scale_class"):
             out[m][key] = dict(zip(("rho", "p", "n"), correlation(ev, m, key)),
                                within_class=within_class(ev, m, key)[0])
+        out[m]["bars"] = bar_calibration([r for r in ev.records if r.matcher == m])
     return out
+
+
+def bar_calibration(records) -> dict:
+    """How the error bars δ(2ε̂) hold the errors (both in units of sqrt(area)), over records with both.
+
+    ``held``: fraction of matchings whose error is at most their bar; ``median_ratio``: median of
+    bar / error; ``rho``: Spearman's ρ between bar and error over the matchings, and
+    ``within_class``: the mean of the per-class ρ.
+    """
+    rs = [r for r in records if np.isfinite(r.bar) and np.isfinite(r.error_area) and r.error_area > 0]
+    if not rs:
+        return dict(n=0, held=math.nan, median_ratio=math.nan, rho=math.nan, within_class=math.nan)
+    bar, err = np.array([r.bar for r in rs]), np.array([r.error_area for r in rs])
+    rho = float(spearmanr(bar, err).statistic) if len(rs) >= 3 and np.ptp(bar) > 0 and np.ptp(err) > 0 else math.nan
+    per = []
+    for cls in sorted({r.cls for r in rs}):
+        b = [r.bar for r in rs if r.cls == cls]
+        e = [r.error_area for r in rs if r.cls == cls]
+        if len(b) >= 3 and np.ptp(b) > 0 and np.ptp(e) > 0:
+            per.append(float(spearmanr(b, e).statistic))
+    return dict(n=len(rs), held=float(np.mean(err <= bar)), median_ratio=float(np.median(bar / err)), rho=rho,
+                within_class=float(np.mean(per)) if per else math.nan)
 
 
 def null_shapes(ev) -> dict:

@@ -1,0 +1,94 @@
+"""The error bar's bound against enumeration: a map found by minimising distortion errs by at most δ(ε̂ + ε)."""
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.distance import cdist
+
+from shapecond.errors import InputError
+from shapecond.matching.error_bar import TRIANGLE_FACTOR, dense_error_bar, error_bar, map_distortion
+from shapecond.matching.sampled import sample_surface
+from shapecond.shapes.synthetic import bumpy_blob
+from shapecond.symmetry import objective as obj
+from shapecond.symmetry.scale import budget_of, scale_score
+
+
+def _levels(Ds, Dt, t, lm):
+    """(global RMS distortion sqrt(Σ (Ds − Dt∘t)²)/N, largest landmark-row RMS) of the map t: X -> X̃."""
+    n = Ds.shape[0]
+    diff = Ds - Dt[np.ix_(t, t)]
+    rows = [math.sqrt(np.sum(diff[l] ** 2) / n) for l in lm]
+    return math.sqrt(np.sum(diff ** 2)) / n, max(rows, default=0.0)
+
+
+def _exact_delta(D, eps, lm):
+    n = D.shape[0]
+    free = [x for x in range(n) if x not in lm]
+    best = 0.0
+    for perm in itertools.permutations(free):
+        t = np.arange(n)
+        t[free] = perm
+        budget = budget_of(eps, n, D)
+        if obj.dist2(D, t) > budget:
+            continue
+        rows = obj.anchor_rows(D, t, lm)
+        if rows.size and rows.max() > budget / n:
+            continue
+        best = max(best, math.sqrt(obj.d2(D, t) / n))
+    return best
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_distortion_minimiser_errs_by_at_most_delta_of_its_level_plus_the_truths(seed):
+    rng = np.random.default_rng(seed)
+    n, lm = 7, [0, 1]
+    p = rng.uniform(size=(n, 2))
+    Ds = cdist(p, p)
+    q = p + rng.normal(scale=0.04, size=p.shape)       # the deformed shape: the truth is the identity
+    Dt = cdist(q, q)
+    best, found = math.inf, None
+    for perm in itertools.permutations(range(2, n)):  # the matcher: least distortion, landmarks fixed
+        t = np.array([0, 1, *perm])
+        g, r = _levels(Ds, Dt, t, lm)
+        if max(g, r) < best:
+            best, found = max(g, r), t
+    truth = max(_levels(Ds, Dt, np.arange(n), lm))
+    assert best <= truth + 1e-12                      # ε̂ reads the truth's level from below
+    error = math.sqrt(obj.d2(Ds, found) / n)           # RMS displacement of the found map from the truth
+    assert error <= _exact_delta(Ds, best + truth, lm) + 1e-12  # the triangle bound the bar rests on
+
+
+def test_map_distortion_is_zero_for_the_identity_and_grows_with_a_deformation():
+    g = bumpy_blob(subdivisions=3)
+    src = sample_surface(g, 40, cache=False)
+    assert map_distortion(src, g, src.samples) == pytest.approx(0.0, abs=1e-6)
+    shuffled = src.samples[np.r_[1, 0, 2:40]]          # two samples swapped: a distorting map
+    assert map_distortion(src, g, shuffled) > 1e-3
+
+
+def test_error_bar_is_delta_at_twice_the_level_with_its_witness():
+    g = bumpy_blob(subdivisions=3)
+    src = sample_surface(g, 40, landmarks=[5, 60, 200], cache=False)
+    bar = error_bar(src, 3, 0.05, seed=0)                  # about a third of the sample spacing (sqrt(area) units)
+    assert bar.epsilon == pytest.approx(TRIANGLE_FACTOR * 0.05)
+    ref = scale_score(src.D, 40, [0, 1, 2], TRIANGLE_FACTOR * 0.05, seed=0, effort="quick")
+    assert bar.delta == pytest.approx(ref.displacement) and bar.delta > 0
+    assert bar.delta_diameter == pytest.approx(bar.delta / src.D.max())
+    assert bar.doubt.shape == (40,) and np.all(bar.doubt[:3] == 0)   # the landmarks do not move
+    assert np.sqrt(np.mean(bar.doubt ** 2)) == pytest.approx(bar.delta)  # δ is the RMS of the doubt field
+    assert set(bar.doubt_ids) <= set(g.ids[src.samples].tolist())
+    with pytest.raises(InputError):
+        error_bar(src, 3, float("nan"))
+
+
+def test_the_right_map_of_a_shape_onto_itself_has_no_distortion_and_a_bar_at_delta_zero():
+    g = bumpy_blob(subdivisions=3)
+    src = sample_surface(g, 40, landmarks=[5, 60, 200], cache=False)
+    bar, field = dense_error_bar(src, g, np.arange(g.n_vertices), 3)
+    assert bar.epsilon_hat == pytest.approx(0.0, abs=1e-6)
+    assert bar.delta == pytest.approx(scale_score(src.D, 40, [0, 1, 2], 0.0, effort="quick").displacement, abs=1e-9)
+    assert field.shape == (g.n_vertices,) and np.all(field >= 0)
+    worse, _ = dense_error_bar(src, g, np.roll(np.arange(g.n_vertices), 7), 3)   # a scrambled map
+    assert worse.epsilon_hat > bar.epsilon_hat and worse.delta >= bar.delta
