@@ -128,8 +128,7 @@ def _move_ratios(D, n, free, t, d2c, dist2c):
 
 
 def _safe_ratio(D, n, num, den, mask):
-    scale2 = float(np.sum(D[:n, :n] ** 2))
-    iso = den <= (objective.ISOMETRY_RTOL**2) * scale2
+    iso = den <= objective.isometry_floor(D, n)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(iso, np.inf, num / np.where(iso, 1.0, den))
     r = np.where(num <= 0.0, 0.0, r)
@@ -185,7 +184,7 @@ def branch_and_bound(D, n, landmarks, r0, t0, deadline):
     free = np.setdiff1d(np.arange(n), L).astype(np.int64)
     targets = np.setdiff1d(np.arange(M), L).astype(np.int64)
     t_init = np.arange(n, dtype=np.int64) if t0 is None else np.asarray(t0, dtype=np.int64).copy()
-    iso2 = (objective.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2))
+    iso2 = objective.isometry_floor(D, n)
     budget = math.inf if deadline is None else deadline - time.perf_counter()
     r, t, finished, nodes = _dfs(D, n, L, free, targets, float(r0), t_init, iso2, 1e-12 * n, float(budget))
     if t0 is None and r == 0.0:

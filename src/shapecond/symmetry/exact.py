@@ -108,13 +108,13 @@ def _enumerate(D, n, L):
     ident = np.all(maps == np.arange(n), axis=1)
     maps = maps[~ident]
     Dx = D[:n, :n]
-    scale2 = float(np.sum(Dx**2))
+    floor = objective.isometry_floor(D, n)
     best_r, best_t = 0.0, None
     for s in range(0, maps.shape[0], _BLOCK):
         T = maps[s : s + _BLOCK]
         num = np.sum(D[np.arange(n), T] ** 2, axis=1)
         den = np.sum((Dx[None] - D[T[:, :, None], T[:, None, :]]) ** 2, axis=(1, 2))
-        iso = (den <= (objective.ISOMETRY_RTOL**2) * scale2) & (num > 0)
+        iso = (den <= floor) & (num > 0)
         if np.any(iso):
             return math.inf, T[int(np.argmax(iso))].copy(), maps.shape[0]
         with np.errstate(divide="ignore", invalid="ignore"):

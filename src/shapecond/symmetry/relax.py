@@ -398,7 +398,7 @@ def _isometry_ratio(D: np.ndarray, n: int) -> float:
     pos = rows[rows > 0]
     if pos.size == 0:
         return math.inf
-    return float(pos.min()) ** 2 / ((objective.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2)))
+    return float(pos.min()) ** 2 / objective.isometry_floor(D, n)
 
 
 __all__ = ["LPResult", "lp_upper_bound", "MAX_LP_POINTS", "build_lp", "lp_size"]

@@ -29,7 +29,7 @@ from shapecond.jsonable import jsonable
 from shapecond.errors import InputError, TooLargeError
 from shapecond.limits import check_cost, search_seconds
 from shapecond.symmetry.resolution import coarse_to_fine, two_levels
-from shapecond.symmetry.search import _prepare, best_single_swap, witness_search
+from shapecond.symmetry.search import prepare_instance, best_single_swap, witness_search
 
 #: ``exact="auto"`` computes σ exactly when enumeration is quick (<= this many maps).
 AUTO_EXACT_MAPS = 362_880  # 9!: about half a second
@@ -144,7 +144,7 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
     for the resolution report.
     """
     t0 = time.perf_counter()
-    D, n, lm, _ = _prepare(D, n_samples, landmarks)
+    D, n, lm, _ = prepare_instance(D, n_samples, landmarks)
     m = D.shape[0]
     notes = []
     coarse = None
