@@ -54,6 +54,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shapecond.errors import InputError
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry.search import prepare_instance, witness_search
 
@@ -158,8 +159,6 @@ def scale_score(D, n_samples=None, landmarks=(), epsilon=None, seed=0, effort="d
     D, n, lm, _ = prepare_instance(D, n_samples, landmarks)
     eps = default_epsilon(D, n) if epsilon is None else float(epsilon)
     if not (eps >= 0 and math.isfinite(eps)):
-        from shapecond.errors import InputError
-
         raise InputError(f"the distortion level epsilon must be a finite number >= 0, got {epsilon}")
     res = witness_search(D, n, lm, seed=seed, starts=starts, effort=effort, time_limit=time_limit,
                          budget=budget_of(eps, n, D))
