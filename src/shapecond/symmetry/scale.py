@@ -121,11 +121,10 @@ class ScaleScore:
     maps: tuple = field(default=(), repr=False)
 
     def __repr__(self) -> str:
-        moved = int(np.sum(np.asarray(self.witness) != np.arange(len(self.witness))))
-        return (f"ScaleScore(delta={self.displacement:.4g} at epsilon={self.epsilon:.4g} "
-                f"(x{self.amplification:.3g}), distortion {self.distortion:.4g}, N={self.n_points}, "
-                f"M={self.n_targets}, {len(self.landmarks)} landmarks, witness moves {moved} of {self.n_points} "
-                f"samples{' (an isometry)' if self.isometry else ''}, {self.seconds:.2f} s)")
+        kind = " (an isometry)" if self.isometry else ""
+        return (f"ScaleScore(delta={self.displacement:.4g} at epsilon={self.epsilon:.4g} (x{self.amplification:.3g}), "
+                f"distortion {self.distortion:.4g}, witness moves {self.moved:.0%} of the samples{kind}, "
+                f"N={self.n_points}, M={self.n_targets}, {len(self.landmarks)} landmarks, {self.seconds:.2f} s)")
 
     @property
     def amplification(self) -> float:
