@@ -175,3 +175,26 @@ def test_sparse_affinity_of_a_local_kernel_equals_the_dense_reference():
     ref = affinity_matrix(Ds, Dt, cand, kernel, compiled=False)
     assert M.nnz == np.count_nonzero(ref) > 0
     assert np.allclose(M.toarray(), ref, rtol=1e-6, atol=0)
+
+
+def test_matcher_options_show_in_the_signature_and_keywords_are_the_same_call():
+    import inspect
+
+    from shapecond.matching.seeded import FAQOptions
+    from shapecond.matching.spectral import LH05Options
+
+    # callers read a matcher's options from its signature (the API refuses unknown ones)
+    assert {"k", "rounding", "nested"} <= set(inspect.signature(lh05_match).parameters)
+    assert inspect.signature(lh05_match).parameters["k"].default == 20
+    assert {"objective", "init", "seed"} <= set(inspect.signature(faq_match).parameters)
+    _, D = _planar(30, 1)
+    Dt, _ = _permuted(D, 2)
+    lm = [0, 1, 2, 3]
+    a = lh05_match(D, Dt, lm, lm, k=6, rounds=1)
+    b = lh05_match(D, Dt, lm, lm, LH05Options(k=6, rounds=1))
+    assert np.array_equal(a.t, b.t)
+    c = faq_match(D, Dt, lm, lm, objective="gaussian", maxiter=5)
+    d = faq_match(D, Dt, lm, lm, options=FAQOptions(objective="gaussian", maxiter=5))
+    assert np.array_equal(c.t, d.t)
+    with pytest.raises(InputError):
+        lh05_match(D, Dt, lm, lm, rounding="nearest")

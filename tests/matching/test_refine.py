@@ -122,8 +122,8 @@ def test_swap_search_makes_the_moves_of_a_full_rescan(seed, kernel):
     for max_moves in (3, 50 * n):
         want, moves = _brute_force_swaps(Ds, Dt, t0, knn, set(free.tolist()), kernel, max_moves)
         t = t0.astype(np.int64)
-        got = R._swap_search(Ds, Dt, t, knn, R.rank_table(knn), R.support_lists(Ds, p[3]), isfree,
-                             *p, max_moves)
+        lists = R._Lists(knn, R.rank_table(knn), R.support_lists(Ds, p[3]))
+        got = R._swap_search(Ds, Dt, t, lists, isfree, p, max_moves)
         assert got == moves and np.array_equal(t, want)
 
 
@@ -174,14 +174,14 @@ def test_compiled_gain_tables_equal_the_gain_entries(seed, kernel):
     p = kernel.params()
     rows = np.arange(1, 12)
     img = t[rows]
-    entries = np.array([[R._gain_entry(Ds, Dt, t, x, y, *p) for y in img] for x in rows])
-    band = R._gain_band(Ds, Dt, t, rows, np.ascontiguousarray(np.broadcast_to(img, (rows.size, img.size))), *p)
-    cols = R._gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, rows, *p)
+    entries = np.array([[R._gain_entry(Ds, Dt, t, x, y, p) for y in img] for x in rows])
+    band = R._gain_band(Ds, Dt, t, rows, np.ascontiguousarray(np.broadcast_to(img, (rows.size, img.size))), p)
+    cols = R._gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, rows, p)
     assert np.array_equal(cols, band)
     assert np.allclose(band, entries, rtol=1e-12, atol=1e-15)
     near = R.support_lists(Ds, p[3])
-    terms, buf = R._support_terms(Ds, near, *p[:3]), np.empty(near.shape[1])
-    assert np.array_equal([[R._gain_near(Dt, t, near, *terms, x, y, buf) for y in img] for x in rows],
+    terms, buf = R._support_terms(Ds, near, p), np.empty(near.shape[1])
+    assert np.array_equal([[R._gain_near(Dt, t, near, terms, x, y, buf) for y in img] for x in rows],
                           entries)
 
 

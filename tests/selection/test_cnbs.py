@@ -174,3 +174,19 @@ def test_heat_map_is_the_same_in_one_thread_and_in_two(budget):
         numba.set_num_threads(before)
     for a, c in zip(*out):
         np.testing.assert_array_equal(a, c)
+
+
+def test_cnbs_options_reach_every_heat_map_and_keywords_are_the_same_call():
+    from shapecond.selection import method_options
+    from shapecond.errors import InputError
+    from shapecond.selection.cnbs import CNBSOptions
+
+    D = near_symmetric(24, 5)
+    a = cnbs_landmarks(D, 24, 2, seed=1, effort="quick", n_kicks=2, n_cross=4, max_verify=1)
+    b = cnbs_landmarks(D, 24, 2, options=CNBSOptions(seed=1, effort="quick", n_kicks=2, n_cross=4, max_verify=1))
+    assert a["landmarks"] == b["landmarks"] and a["scores"] == b["scores"]
+    assert {"n_kicks", "n_cross", "max_verify", "resolve_fraction"} <= method_options("cnbs")
+    with pytest.raises(InputError):
+        CNBSOptions(resolve="sometimes")
+    with pytest.raises(TypeError):
+        heat_map(D, 24, n_kick=2)

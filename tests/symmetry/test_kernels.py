@@ -31,8 +31,7 @@ def _value(mode, s, D, t, lm, n):
     """The objective the kernel maximises, from the definitions."""
     num, den = obj.d2(D, t), obj.dist2(D, t)
     if mode == K.MODE_RATIO:
-        floor = obj.ISOMETRY_RTOL**2 * float(np.sum(D[:n, :n] ** 2))
-        return num / max(den, floor) if num > 0 else -1.0
+        return num / max(den, obj.isometry_floor(D, n)) if num > 0 else -1.0
     if mode == K.MODE_FIXED_S:
         return num - s * den
     exc = max(den - s, 0.0) + float(np.sum(np.maximum(obj.anchor_rows(D, t, lm) - s / n, 0.0)))
@@ -63,8 +62,8 @@ def test_local_search_tracks_exact_values_and_ends_in_a_local_optimum(seed, n, e
     used = np.zeros(m, dtype=bool)
     used[t] = True
     rows = obj.anchor_rows(D, t, lm)
-    d2, dist2, moves = K.local_search(D, n, t, G, H, free, stage.knn, used, mode, float(s), obj.d2(D, t),
-                                      obj.dist2(D, t), stage.floor, 10_000, np.inf, lm, rows, s / n)
+    d2, dist2, moves = K.local_search(stage.space(), K.Goal(mode, float(s), 10_000, np.inf, lm, s / n),
+                                      K.MapState(t, G, H, used, rows, obj.d2(D, t), obj.dist2(D, t)))
     assert moves < 10_000
     assert math.isclose(d2, obj.d2(D, t), rel_tol=1e-9, abs_tol=1e-12)
     assert math.isclose(dist2, obj.dist2(D, t), rel_tol=1e-9, abs_tol=1e-12)
@@ -97,8 +96,8 @@ def test_local_search_leaves_g_alone_and_stops_above_stop():
     G0, H, used = G.copy(), obj.image_energy(D, t), np.zeros(14, dtype=bool)
     used[t] = True
     start = obj.d2(D, t) / obj.dist2(D, t)
-    d2, dist2, moves = K.local_search(D, n, t, G, H, free, stage.knn, used, K.MODE_RATIO, 0.0, obj.d2(D, t),
-                                      obj.dist2(D, t), stage.floor, 10_000, start * 1.0001,
-                                      np.zeros(0, np.int64), np.zeros(0), 0.0)
+    goal = K.Goal(K.MODE_RATIO, 0.0, 10_000, start * 1.0001, np.zeros(0, np.int64), 0.0)
+    d2, dist2, moves = K.local_search(stage.space(), goal,
+                                      K.MapState(t, G, H, used, np.zeros(0), obj.d2(D, t), obj.dist2(D, t)))
     assert np.array_equal(G, G0)  # read, never written
     assert moves >= 1 and d2 / dist2 > start * 1.0001

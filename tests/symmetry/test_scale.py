@@ -126,3 +126,9 @@ def test_cnbs_scale_landmarks_have_non_increasing_scores():
     assert res.initial_score >= res.scores[0]
     base = select_landmarks(shape, 4, "fps", scores=True, score="scale")
     assert base.score == "scale" and list(base.scores) == sorted(base.scores, reverse=True)
+
+
+def test_scale_score_repr_is_short():
+    D = cdist(*(2 * [np.random.default_rng(2).normal(size=(30, 3))]))
+    r = repr(scale_score(D / D.max(), effort="quick"))
+    assert len(r) < 300 and "array(" not in r and "N=30" in r

@@ -101,3 +101,15 @@ def test_animal_n100_mirror_is_the_witness(delta):
     else:
         assert math.isfinite(res.sigma)
     assert np.array_equal(res.witness, mirror)
+
+
+def test_options_object_and_keywords_are_the_same_call_and_the_repr_is_short():
+    from shapecond.symmetry.score import ScoreOptions
+
+    D = random_instance(np.random.default_rng(7), 40, 3)
+    a = symmetry_score(D, exact=False, seed=3, effort="quick")
+    b = symmetry_score(D, options=ScoreOptions(exact=False, seed=3, effort="quick"))
+    assert a.sigma_lower == b.sigma_lower and np.array_equal(a.witness, b.witness)
+    assert len(repr(a)) < 300 and "array(" not in repr(a) and "N=40" in repr(a)
+    with pytest.raises(TypeError):
+        symmetry_score(D, exactly=False)

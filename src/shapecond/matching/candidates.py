@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from shapecond.checks import check_distance_matrix
 from shapecond.errors import InputError
 
 #: quantile levels of the intrinsic part of the descriptor
@@ -83,6 +84,14 @@ def check_landmarks(n_source: int, n_target: int, landmarks_source, landmarks_ta
         if np.unique(ids).size != ids.size:
             raise InputError(f"{name} landmarks contain repeated ids")
     return ls, lt
+
+
+def check_distances(D_source, D_target):
+    """The source and target distance matrices as float64 arrays, each validated first
+    (``checks.check_distance_matrix``: one clear error for NaN, inf, asymmetry...)."""
+    check_distance_matrix(D_source, "source distances")
+    check_distance_matrix(D_target, "target distances")
+    return np.asarray(D_source, dtype=np.float64), np.asarray(D_target, dtype=np.float64)
 
 
 def descriptors(D: np.ndarray, landmarks: np.ndarray, quantile_weight: float = 0.5) -> np.ndarray:

@@ -51,7 +51,8 @@ class Kernel:
     radius: float = math.inf
 
     def params(self):
-        """(τ₀², ρ², 1/(4R²), (2R)²) for the compiled kernels (0 and ∞ for R = ∞)."""
+        """``kp = (τ₀², ρ², 1/(4R²), (2R)²)``, the kernel as the compiled functions take it (0 and ∞
+        for R = ∞)."""
         if not self.tol > 0:
             raise ValueError("the kernel tolerance must be positive")
         if math.isinf(self.radius):
@@ -61,8 +62,9 @@ class Kernel:
 
 
 @numba.njit(cache=True, inline="always")
-def _k(d, e, t0, r2, iw2, cut2):
-    """K(d, e); ``iw2`` = 1 / (2R)², ``cut2`` = (2R)²."""
+def _k(d, e, kp):
+    """K(d, e) for the kernel ``kp = (τ₀², ρ², 1/(2R)², (2R)²)`` (``Kernel.params``)."""
+    t0, r2, iw2, cut2 = kp
     d2 = d * d
     if d2 >= cut2:
         return 0.0
@@ -75,29 +77,30 @@ def _k(d, e, t0, r2, iw2, cut2):
 
 
 @numba.njit(cache=True)
-def _objective(Ds, Dt, t, t0, r2, ir2, cut2):
+def _objective(Ds, Dt, t, kp):
     n = Ds.shape[0]
     s = 0.0
     for x in range(n):
         for xp in range(n):
             if xp != x:
-                s += _k(Ds[x, xp], Dt[t[x], t[xp]], t0, r2, ir2, cut2)
+                s += _k(Ds[x, xp], Dt[t[x], t[xp]], kp)
     return s
 
 
 @numba.njit(cache=True)
-def _gain_entry(Ds, Dt, t, x, y, t0, r2, ir2, cut2):
+def _gain_entry(Ds, Dt, t, x, y, kp):
     """Q[x, y] = Σ_{x' ≠ x} K(D_s[x, x'], D_t[y, T x'])."""
     s = 0.0
     for xp in range(Ds.shape[0]):
         if xp != x:
-            s += _k(Ds[x, xp], Dt[y, t[xp]], t0, r2, ir2, cut2)
+            s += _k(Ds[x, xp], Dt[y, t[xp]], kp)
     return s
 
 
 @numba.njit(cache=True)
-def _gain_row(Ds, Dt, t, x, cols, out, t0, r2, ir2, cut2):
+def _gain_row(Ds, Dt, t, x, cols, out, kp):
     """out[j] = Q[x, cols[j]]: the pairs within the kernel's support gathered once."""
+    t0, r2, ir2, cut2 = kp
     n = Ds.shape[0]
     nb = np.empty(n, dtype=np.int64)
     dv = np.empty(n)
@@ -127,11 +130,11 @@ def _gain_row(Ds, Dt, t, x, cols, out, t0, r2, ir2, cut2):
 
 
 @numba.njit(cache=True, parallel=True)
-def _gain_band(Ds, Dt, t, rows, band, t0, r2, ir2, cut2):
+def _gain_band(Ds, Dt, t, rows, band, kp):
     """Q[rows[i], band[i, j]] (module docstring), one row per thread."""
     Q = np.empty(band.shape)
     for i in numba.prange(rows.size):
-        _gain_row(Ds, Dt, t, rows[i], band[i], Q[i], t0, r2, ir2, cut2)
+        _gain_row(Ds, Dt, t, rows[i], band[i], Q[i], kp)
     return Q
 
 
@@ -149,7 +152,7 @@ def support_lists(D_source, cut2: float) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
-def _objective_near(Ds, Dt, t, near, t0, r2, ir2, cut2):
+def _objective_near(Ds, Dt, t, near, kp):
     """``_objective`` summed over the pairs within the kernel's support (``support_lists``):
     its non-zero terms in its order, so the same value."""
     s = 0.0
@@ -158,19 +161,19 @@ def _objective_near(Ds, Dt, t, near, t0, r2, ir2, cut2):
             xp = near[x, q]
             if xp < 0:
                 break
-            s += _k(Ds[x, xp], Dt[t[x], t[xp]], t0, r2, ir2, cut2)
+            s += _k(Ds[x, xp], Dt[t[x], t[xp]], kp)
     return s
 
 
-
 @numba.njit(cache=True, nogil=True)
-def _support_terms(Ds, near, t0, r2, ir2):
+def _support_terms(Ds, near, kp):
     """The parts of ``K(D_s[b, x'], ·)`` that depend on the source only, over ``near[b]``.
 
     Returns ``(count, d, den, w)``: ``count[b]`` entries of ``near[b]``, their
     distances ``d``, the denominators ``4 τ(d)²`` of the disagreement and the
     locality weights ``w(d)`` of the module docstring (the factors of ``_k``).
     """
+    t0, r2, ir2, _ = kp
     n, width = near.shape
     count = np.zeros(n, dtype=np.int64)
     d = np.zeros((n, width))
@@ -190,10 +193,11 @@ def _support_terms(Ds, near, t0, r2, ir2):
 
 
 @numba.njit(cache=True, nogil=True)
-def _gain_near(Dt, t, near, count, d, den, w, b, y, buf):
+def _gain_near(Dt, t, near, terms, b, y, buf):
     """Q[b, y] summed over ``near[b]`` (``support_lists``): the terms of ``_gain_entry``
-    that are not zero, in its order, so the same sum; the source factors from
+    that are not zero, in its order, so the same sum; the source factors ``terms`` from
     ``_support_terms``, the terms evaluated branch-free (so that they vectorise)."""
+    count, d, den, w = terms
     c = count[b]
     for q in range(c):
         buf[q] = Dt[y, t[near[b, q]]]
@@ -207,32 +211,30 @@ def _gain_near(Dt, t, near, count, d, den, w, b, y, buf):
     return s
 
 
-
 def _f64(D):
     return np.ascontiguousarray(D, dtype=np.float64)
 
 
 def objective(D_source, D_target, t, kernel: Kernel) -> float:
     """``F(T)`` of the module docstring."""
-    return float(_objective(_f64(D_source), _f64(D_target), np.asarray(t, dtype=np.int64),
-                            *kernel.params()))
+    return float(_objective(_f64(D_source), _f64(D_target), np.asarray(t, dtype=np.int64), kernel.params()))
 
 
 def gain(D_source, D_target, t, x: int, y: int, kernel: Kernel) -> float:
     """One entry ``Q[x, y]`` of the gain matrix (module docstring)."""
     return float(_gain_entry(_f64(D_source), _f64(D_target), np.asarray(t, dtype=np.int64),
-                             int(x), int(y), *kernel.params()))
-
+                             int(x), int(y), kernel.params()))
 
 
 @numba.njit(cache=True, parallel=True)
-def _gain_columns(Ds, Dc, t, rows, t0, r2, ir2, cut2):
+def _gain_columns(Ds, Dc, t, rows, kp):
     """Q[rows[i], y_j] for every target ``y_j`` of ``Dc[u, j] = D_t[y_j, u]`` (module docstring).
 
     The terms of each entry are those of ``_gain_row``, added in the same order; the
     loop runs over the pairs within the support of a row and, inside, over the
     targets (a contiguous row of ``Dc``), so that it vectorises.
     """
+    t0, r2, ir2, cut2 = kp
     n = Ds.shape[0]
     nc = Dc.shape[1]
     Q = np.zeros((rows.size, nc))

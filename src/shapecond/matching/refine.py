@@ -32,6 +32,8 @@ which ignores the samples the map still gets wrong.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -52,122 +54,157 @@ def rank_table(knn: np.ndarray) -> np.ndarray:
     return rank
 
 
+class _Lists(NamedTuple):
+    """The neighbour lists of ``_swap_search``."""
+
+    knn: np.ndarray  # (N_t, k) nearest target samples of each target sample (``neighbours``)
+    rank: np.ndarray  # (N_t, N_t) position + 1 of a target in another's knn row (``rank_table``)
+    near: np.ndarray  # (N_s, w) source samples within the kernel's support (``support_lists``)
+
+
+class _Bands(NamedTuple):
+    """What ``_swap_search`` keeps between moves (its docstring)."""
+
+    B: np.ndarray  # (N_s, k + 1) band of each sample: its image, then the image's knn
+    Qb: np.ndarray  # gains over the bands, Qb[x, j] = Q[x, B[x, j]]
+    inv: np.ndarray  # (N_t,) source sample of each target (-1: none)
+    terms: tuple  # ``_support_terms`` of the source
+    buf: np.ndarray
+    version: np.ndarray  # bumped when T changes within near[b]
+    cache: np.ndarray  # Q[b, T a] of a pair (a, j) summed over near[b] ...
+    cache_key: np.ndarray  # ... for this (b, T a, version[b])
+    best_gain: np.ndarray  # each sample's best swap: its gain ...
+    best_j: np.ndarray  # ... and its position in the sample's band
+    dirty: np.ndarray  # samples to rescan
+    in_s: np.ndarray  # samples whose band gains changed in the last move
+
+
 @numba.njit(cache=True, nogil=True)
-def _swap_search(Ds, Dt, t, knn, rank, near, isfree, t0, r2, ir2, cut2, max_moves):
-    """Best-improvement swaps of neighbouring images; ``t`` updated in place.
-
-    The band of x is its image and the ``k`` nearest target samples of it:
-    ``B[x] = (T x, knn[T x])`` with gains ``Qb[x, j] = Q[x, B[x, j]]``.  The gain
-    of b at T a is read from b's band at ``rank[T b, T a]`` (``rank_table``), or
-    summed over ``near[b]`` (``support_lists``) when T a is not in it.
-
-    Each sample ``a`` keeps its best swap (largest gain, first in band order);
-    after a move only the samples whose gains can have changed are rescanned:
-    those within the kernel's support of the two moved samples (``S``: their
-    band gains changed) and those with a swap partner in ``S``.  A gain summed
-    over ``near[b]`` is kept with the version of ``b``'s neighbourhood.  The
-    move chosen is the first of the largest gain in ``(a, band)`` order, as a
-    full scan would choose it.
-    """
-    n = Ds.shape[0]
-    m = Dt.shape[0]
-    kb = knn.shape[1] + 1
+def _bands(Ds, Dt, t, lists, kp):
+    """The bands of the map ``t`` and their gains; every sample to be scanned."""
+    n, m = Ds.shape[0], Dt.shape[0]
+    kb = lists.knn.shape[1] + 1
     B = np.empty((n, kb), dtype=np.int64)
     for x in range(n):
         B[x, 0] = t[x]
-        B[x, 1:] = knn[t[x]]
-    Qb = _gain_band(Ds, Dt, t, np.arange(n), B, t0, r2, ir2, cut2)
+        B[x, 1:] = lists.knn[t[x]]
+    Qb = _gain_band(Ds, Dt, t, np.arange(n), B, kp)
     inv = np.full(m, -1, dtype=np.int64)
     for x in range(n):
         inv[t[x]] = x
-    count, nd, nden, nw = _support_terms(Ds, near, t0, r2, ir2)
-    buf = np.empty(near.shape[1])
-    version = np.zeros(n, dtype=np.int64)  # bumped when T changes within near[b]
-    cache = np.zeros((n, kb))  # Q[b, T a] of a pair (a, j) summed over near[b] ...
-    cache_key = np.full((n, kb, 3), -1, dtype=np.int64)  # ... for this (b, T a, version[b])
-    best_gain = np.full(n, -np.inf)
-    best_j = np.zeros(n, dtype=np.int64)
-    dirty = np.ones(n, dtype=np.bool_)
-    in_s = np.zeros(n, dtype=np.bool_)
+    near = lists.near
+    return _Bands(B, Qb, inv, _support_terms(Ds, near, kp), np.empty(near.shape[1]), np.zeros(n, dtype=np.int64),
+                  np.zeros((n, kb)), np.full((n, kb, 3), -1, dtype=np.int64), np.full(n, -np.inf),
+                  np.zeros(n, dtype=np.int64), np.ones(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_))
+
+
+@numba.njit(cache=True, nogil=True)
+def _rescan(Ds, Dt, t, lists, isfree, kp, st):
+    """The best swap of every dirty sample a: the largest gain ΔF / 2 (module docstring), first in
+    band order, over the samples b whose image is in a's band.  The gain of b at T a is read from
+    b's band at ``rank[T b, T a]``, or summed over ``near[b]`` (kept with the version of b's
+    neighbourhood) when T a is not in it."""
+    B, Qb, inv, rank, cache, key, version = st.B, st.Qb, st.inv, lists.rank, st.cache, st.cache_key, st.version
+    near, terms, buf, dirty, best_gain, best_j = lists.near, st.terms, st.buf, st.dirty, st.best_gain, st.best_j
+    for a in range(Ds.shape[0]):
+        if not dirty[a]:
+            continue
+        dirty[a] = False
+        best_gain[a] = -np.inf
+        if not isfree[a]:
+            continue
+        ta = t[a]
+        for j in range(1, B.shape[1]):
+            b = inv[B[a, j]]
+            if b < 0 or b == a or not isfree[b]:
+                continue
+            tb = t[b]
+            dab = Ds[a, b]
+            rb = rank[tb, ta]
+            if rb > 0:
+                qba = Qb[b, rb]
+            elif key[a, j, 0] == b and key[a, j, 1] == ta and key[a, j, 2] == version[b]:
+                qba = cache[a, j]
+            else:
+                qba = _gain_near(Dt, t, near, terms, b, ta, buf)
+                cache[a, j] = qba
+                key[a, j, 0] = b
+                key[a, j, 1] = ta
+                key[a, j, 2] = version[b]
+            gain = (Qb[a, j] - Qb[a, 0] + qba - Qb[b, 0] - 2.0 * _k(dab, 0.0, kp) + 2.0 * _k(dab, Dt[ta, tb], kp))
+            if gain > best_gain[a]:
+                best_gain[a] = gain
+                best_j[a] = j
+
+
+@numba.njit(cache=True, nogil=True)
+def _make_swap(Ds, Dt, t, lists, kp, st, ba, bb):
+    """Exchange the images of ``ba`` and ``bb``: the band gains of the samples within the kernel's
+    support of either (``in_s``) get the terms of the two, their own bands are rebuilt, and every
+    sample in ``in_s`` or with a swap partner in it is marked dirty."""
+    n, B, Qb, in_s = Ds.shape[0], st.B, st.Qb, st.in_s
+    ta = t[ba]
+    tb = t[bb]
+    in_s[:] = False
+    for x in range(n):
+        if x == ba or x == bb:
+            continue
+        da = Ds[x, ba]
+        db = Ds[x, bb]
+        if da * da > kp[3] and db * db > kp[3]:
+            continue
+        in_s[x] = True
+        for j in range(B.shape[1]):
+            y = B[x, j]
+            Qb[x, j] += (_k(da, Dt[y, tb], kp) - _k(da, Dt[y, ta], kp)
+                         + _k(db, Dt[y, ta], kp) - _k(db, Dt[y, tb], kp))
+    t[ba] = tb
+    t[bb] = ta
+    st.inv[tb] = ba
+    st.inv[ta] = bb
+    for x in (ba, bb):
+        in_s[x] = True
+        B[x, 0] = t[x]
+        B[x, 1:] = lists.knn[t[x]]
+        _gain_row(Ds, Dt, t, x, B[x], Qb[x], kp)
+    for x in range(n):
+        if in_s[x]:
+            st.version[x] += 1
+            st.dirty[x] = True
+            continue
+        for j in range(1, B.shape[1]):
+            b = st.inv[B[x, j]]
+            if b >= 0 and in_s[b]:
+                st.dirty[x] = True
+                break
+
+
+@numba.njit(cache=True, nogil=True)
+def _swap_search(Ds, Dt, t, lists, isfree, kp, max_moves):
+    """Best-improvement swaps of neighbouring images; ``t`` updated in place.
+
+    The band of x is its image and the ``k`` nearest target samples of it:
+    ``B[x] = (T x, knn[T x])`` with gains ``Qb[x, j] = Q[x, B[x, j]]``.  Each sample
+    ``a`` keeps its best swap (``_rescan``); after a move (``_make_swap``) only the
+    samples whose gains can have changed are rescanned: those within the kernel's
+    support of the two moved samples (their band gains changed) and those with a swap
+    partner among them.  The move chosen is the first of the largest gain in
+    ``(a, band)`` order, as a full scan would choose it.  Returns the number of moves.
+    """
+    st = _bands(Ds, Dt, t, lists, kp)
     moves = 0
     while moves < max_moves:
-        for a in range(n):
-            if not dirty[a]:
-                continue
-            dirty[a] = False
-            best_gain[a] = -np.inf
-            if not isfree[a]:
-                continue
-            ta = t[a]
-            for j in range(1, kb):
-                b = inv[B[a, j]]
-                if b < 0 or b == a or not isfree[b]:
-                    continue
-                tb = t[b]
-                dab = Ds[a, b]
-                # ΔF / 2 of exchanging T a and T b (module docstring)
-                rb = rank[tb, ta]
-                if rb > 0:
-                    qba = Qb[b, rb]
-                elif cache_key[a, j, 0] == b and cache_key[a, j, 1] == ta and \
-                        cache_key[a, j, 2] == version[b]:
-                    qba = cache[a, j]
-                else:
-                    qba = _gain_near(Dt, t, near, count, nd, nden, nw, b, ta, buf)
-                    cache[a, j] = qba
-                    cache_key[a, j, 0] = b
-                    cache_key[a, j, 1] = ta
-                    cache_key[a, j, 2] = version[b]
-                gain = (Qb[a, j] - Qb[a, 0] + qba - Qb[b, 0]
-                        - 2.0 * _k(dab, 0.0, t0, r2, ir2, cut2)
-                        + 2.0 * _k(dab, Dt[ta, tb], t0, r2, ir2, cut2))
-                if gain > best_gain[a]:
-                    best_gain[a] = gain
-                    best_j[a] = j
+        _rescan(Ds, Dt, t, lists, isfree, kp, st)
         best = 1e-12
         ba = -1
-        for a in range(n):
-            if best_gain[a] > best:
-                best = best_gain[a]
+        for a in range(Ds.shape[0]):
+            if st.best_gain[a] > best:
+                best = st.best_gain[a]
                 ba = a
         if ba < 0:
             break
-        bb = inv[B[ba, best_j[ba]]]
-        ta = t[ba]
-        tb = t[bb]
-        in_s[:] = False
-        for x in range(n):
-            if x == ba or x == bb:
-                continue
-            da = Ds[x, ba]
-            db = Ds[x, bb]
-            if da * da > cut2 and db * db > cut2:
-                continue
-            in_s[x] = True
-            for j in range(kb):
-                y = B[x, j]
-                Qb[x, j] += (_k(da, Dt[y, tb], t0, r2, ir2, cut2) - _k(da, Dt[y, ta], t0, r2, ir2, cut2)
-                             + _k(db, Dt[y, ta], t0, r2, ir2, cut2) - _k(db, Dt[y, tb], t0, r2, ir2, cut2))
-        t[ba] = tb
-        t[bb] = ta
-        inv[tb] = ba
-        inv[ta] = bb
-        for x in (ba, bb):
-            in_s[x] = True
-            B[x, 0] = t[x]
-            B[x, 1:] = knn[t[x]]
-            _gain_row(Ds, Dt, t, x, B[x], Qb[x], t0, r2, ir2, cut2)
+        _make_swap(Ds, Dt, t, lists, kp, st, ba, st.inv[st.B[ba, st.best_j[ba]]])
         moves += 1
-        for x in range(n):
-            if in_s[x]:
-                version[x] += 1
-                dirty[x] = True
-                continue
-            for j in range(1, kb):
-                b = inv[B[x, j]]
-                if b >= 0 and in_s[b]:
-                    dirty[x] = True
-                    break
     return moves
 
 
@@ -182,7 +219,7 @@ def neighbours(D_target, k: int) -> np.ndarray:
 def _reassign(Ds, Dt, t, free, p):
     """Linear assignment of the free samples to their current images maximising Σ Q[x, T' x]."""
     img = t[free]
-    Q = _gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, free, *p)
+    Q = _gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, free, p)
     r, c = linear_sum_assignment(Q, maximize=True)
     out = t.copy()
     out[free[r]] = img[c]
@@ -215,13 +252,13 @@ def polish(D_source, D_target, t, free, kernel: Kernel, knn=None, k: int = 16,
     isfree = np.zeros(Ds.shape[0], dtype=np.bool_)
     isfree[free] = True
     knn = neighbours(Dt, k) if knn is None else np.ascontiguousarray(knn[:, :k], dtype=np.int64)
-    rank, near = rank_table(knn), support_lists(Ds, p[3])
-    f = _objective_near(Ds, Dt, t, near, *p)
+    lists = _Lists(knn, rank_table(knn), support_lists(Ds, p[3]))
+    f = _objective_near(Ds, Dt, t, lists.near, p)
     for _ in range(max_rounds):
-        _swap_search(Ds, Dt, t, knn, rank, near, isfree, *p, 50 * Ds.shape[0])
-        f = _objective_near(Ds, Dt, t, near, *p)
+        _swap_search(Ds, Dt, t, lists, isfree, p, 50 * Ds.shape[0])
+        f = _objective_near(Ds, Dt, t, lists.near, p)
         t2 = _reassign(Ds, Dt, t, free, p)
-        f2 = _objective_near(Ds, Dt, t2, near, *p)
+        f2 = _objective_near(Ds, Dt, t2, lists.near, p)
         if not f2 > f * (1 + 1e-12):
             break
         t, f = t2, f2

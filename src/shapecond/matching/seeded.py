@@ -34,13 +34,14 @@ objective than the first three's map when it satisfies them
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment, quadratic_assignment
 
-from shapecond.checks import check_distance_matrix
+from shapecond._options import merge_options, with_options
 from shapecond.errors import InputError
-from shapecond.matching.candidates import check_landmarks, descriptor_cost
+from shapecond.matching.candidates import check_distances, check_landmarks, descriptor_cost
 from shapecond.matching.nested import core_size, with_landmarks
 from shapecond.matching.spectral import SampleMatch, default_sigma
 
@@ -50,11 +51,60 @@ def _score(A, B, t) -> float:
     return float((A * B[np.ix_(t, t)]).sum())
 
 
-def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(),
-              objective: str = "distance", init: str = "descriptor",
-              sigma: float | None = None, sigma_factor: float = 3.0,
-              quantile_weight: float = 0.5, maxiter: int = 60, seed: int = 0,
-              nested: bool = True) -> SampleMatch:
+@dataclass(frozen=True)
+class FAQOptions:
+    """The options of ``faq_match`` (module docstring).
+
+    Attributes
+    ----------
+    objective : "distance" or "gaussian".
+    init : "descriptor" or "barycenter".
+    sigma : kernel width for ``objective="gaussian"``; default
+        ``default_sigma(D_source, sigma_factor)``.
+    sigma_factor : see ``sigma``.
+    quantile_weight : weight of the intrinsic part of the descriptors (``candidates``).
+    maxiter : Frank–Wolfe iterations.
+    seed : passed to scipy as ``rng`` (used only for randomised starts).
+    nested : also solve with the first three seeds and keep the larger objective;
+        ``info["start"]`` says which start won (``"descriptor"``/``"barycenter"``, or ``"core"``).
+    """
+
+    objective: str = "distance"
+    init: str = "descriptor"
+    sigma: float | None = None
+    sigma_factor: float = 3.0
+    quantile_weight: float = 0.5
+    maxiter: int = 60
+    seed: int = 0
+    nested: bool = True
+
+    def __post_init__(self):
+        if self.objective not in ("distance", "gaussian"):
+            raise InputError(f"unknown FAQ objective {self.objective!r} (distance or gaussian)")
+        if self.init not in ("descriptor", "barycenter"):
+            raise InputError(f"unknown FAQ start {self.init!r} (descriptor or barycenter)")
+
+
+def _start_matrix(n, ls, lt, rows, cols):
+    """FAQ's start over the non-seed nodes: the permutation matrix sending the ``rows``-th free
+    source node to the ``cols``-th free target node (scipy orders the non-seed nodes
+    increasingly, as ``np.setdiff1d`` does)."""
+    P0 = np.zeros((n - ls.size, n - lt.size))
+    P0[rows, cols] = 1.0
+    return P0
+
+
+def _objective_matrices(Ds, Dt, opts):
+    """(A, B, s): the matrices whose ``Σ A · B[T, T]`` FAQ maximises (module docstring) and the
+    Gaussian width (None for ``objective="distance"``)."""
+    if opts.objective != "gaussian":
+        return Ds, Dt, None
+    s = default_sigma(Ds, opts.sigma_factor) if opts.sigma is None else float(opts.sigma)
+    return np.exp(-Ds ** 2 / (2 * s * s)), np.exp(-Dt ** 2 / (2 * s * s)), s
+
+
+@with_options(FAQOptions)
+def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(), options=None, **kw) -> SampleMatch:
     """FAQ seeded graph matching, source to target (module docstring).
 
     Parameters
@@ -63,77 +113,59 @@ def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(),
         Sample distances of source and target, same units and same N.
     landmarks_source, landmarks_target : sequences of int
         Seeds (fixed pairs), sample indices.
-    objective : {"distance", "gaussian"}
-    init : {"descriptor", "barycenter"}
-    sigma : float, optional
-        Kernel width for ``objective="gaussian"``; default
-        ``default_sigma(D_source, sigma_factor)``.
-    maxiter : int
-        Frank–Wolfe iterations.
-    seed : int
-        Passed to scipy as ``rng`` (used only for randomised starts).
-    nested : bool
-        Also solve with the first three seeds and keep the larger objective
-        (module docstring); ``info["start"]`` says which start won
-        (``"descriptor"``/``"barycenter"``, or ``"core"``).
+    options : FAQOptions, optional
+        ``objective``, ``init``, ``sigma``, ``maxiter``, ``seed``, ``nested``...; each of its
+        fields may also be given as a keyword argument (``seed=1``).
 
     Returns
     -------
     SampleMatch
         ``info["value"]`` is the objective of ``t``.
     """
+    opts = merge_options(FAQOptions, options, kw, "faq_match")
     t0 = time.perf_counter()
-    check_distance_matrix(D_source, "source distances")  # one clear error for NaN, inf, asymmetry...
-    check_distance_matrix(D_target, "target distances")
-    Ds = np.asarray(D_source, dtype=np.float64)
-    Dt = np.asarray(D_target, dtype=np.float64)
+    Ds, Dt = check_distances(D_source, D_target)
     if Ds.shape != Dt.shape:
         raise InputError(
             f"FAQ needs the same number of samples on both shapes ({Ds.shape[0]} vs {Dt.shape[0]})")
-    if objective not in ("distance", "gaussian"):
-        raise InputError(f"unknown FAQ objective {objective!r} (distance or gaussian)")
-    if init not in ("descriptor", "barycenter"):
-        raise InputError(f"unknown FAQ start {init!r} (descriptor or barycenter)")
     ls, lt = check_landmarks(Ds.shape[0], Dt.shape[0], landmarks_source, landmarks_target)
     n = Ds.shape[0]
-    s = None
-    if objective == "gaussian":
-        s = default_sigma(Ds, sigma_factor) if sigma is None else float(sigma)
-        A, B = np.exp(-Ds ** 2 / (2 * s * s)), np.exp(-Dt ** 2 / (2 * s * s))
-    else:
-        A, B = Ds, Dt
-    options = dict(maximize=True, maxiter=maxiter, rng=np.random.default_rng(seed))
+    A, B, s = _objective_matrices(Ds, Dt, opts)
+    faq = dict(maximize=True, maxiter=opts.maxiter, rng=np.random.default_rng(opts.seed))
     if ls.size:
-        options["partial_match"] = np.column_stack([ls, lt])
-    if init == "descriptor" and ls.size < n:
+        faq["partial_match"] = np.column_stack([ls, lt])
+    if opts.init == "descriptor" and ls.size < n:
         free_s = np.setdiff1d(np.arange(n), ls)
         free_t = np.setdiff1d(np.arange(n), lt)
-        cost = descriptor_cost(Ds, Dt, ls, lt, quantile_weight)[np.ix_(free_s, free_t)]
-        r, c = linear_sum_assignment(cost)
-        P0 = np.zeros((free_s.size, free_t.size))
-        # scipy orders the non-seed nodes increasingly, as free_s / free_t are
-        P0[r, c] = 1.0
-        options["P0"] = P0
-    res = quadratic_assignment(A, B, method="faq", options=options)
+        cost = descriptor_cost(Ds, Dt, ls, lt, opts.quantile_weight)[np.ix_(free_s, free_t)]
+        faq["P0"] = _start_matrix(n, ls, lt, *linear_sum_assignment(cost))
+    res = quadratic_assignment(A, B, method="faq", options=faq)
     t = np.asarray(res.col_ind, dtype=np.int64)
     # the value of scipy's ``res.fun``, summed here as for the other maps compared with it
-    info = dict(objective=objective, init=init, sigma=s, value=_score(A, B, t),
-                iterations=int(res.nit), start=init)
+    info = dict(objective=opts.objective, init=opts.init, sigma=s, value=_score(A, B, t),
+                iterations=int(res.nit), start=opts.init)
     n_core = core_size(ls.size)
-    if nested and n_core:
-        core = faq_match(Ds, Dt, ls[:n_core], lt[:n_core], objective=objective, init=init,
-                         sigma=sigma, sigma_factor=sigma_factor, quantile_weight=quantile_weight,
-                         maxiter=maxiter, seed=seed, nested=nested)
-        start = with_landmarks(core.t, ls, lt)
-        free_s = np.setdiff1d(np.arange(n), ls)
-        free_t = np.setdiff1d(np.arange(n), lt)
-        P0 = np.zeros((free_s.size, free_t.size))
-        P0[np.arange(free_s.size), np.searchsorted(free_t, start[free_s])] = 1.0
-        warm = quadratic_assignment(A, B, method="faq", options={**options, "P0": P0})
-        for cand in (start, np.asarray(warm.col_ind, dtype=np.int64)):
-            value = _score(A, B, cand)
-            if value > info["value"]:
-                t = cand
-                info.update(value=value, start="core")
+    if opts.nested and n_core:
+        t = _nested(Ds, Dt, (ls, lt), n_core, (A, B, faq), opts, t, info)
     info["seconds"] = time.perf_counter() - t0
     return SampleMatch(t, "faq", info)
+
+
+def _nested(Ds, Dt, seeds, n_core, problem, opts, t, info):
+    """Nesting (module docstring): the first ``n_core`` seeds' map sent to the other seeds, and FAQ
+    warm-started from it; returns the map of the largest objective among ``t``, that start and
+    the warm FAQ (``info`` updated when it is not ``t``)."""
+    (ls, lt), (A, B, faq) = seeds, problem
+    n = Ds.shape[0]
+    core = faq_match(Ds, Dt, ls[:n_core], lt[:n_core], opts)
+    start = with_landmarks(core.t, ls, lt)
+    free_s = np.setdiff1d(np.arange(n), ls)
+    free_t = np.setdiff1d(np.arange(n), lt)
+    P0 = _start_matrix(n, ls, lt, np.arange(free_s.size), np.searchsorted(free_t, start[free_s]))
+    warm = quadratic_assignment(A, B, method="faq", options={**faq, "P0": P0})
+    for cand in (start, np.asarray(warm.col_ind, dtype=np.int64)):
+        value = _score(A, B, cand)
+        if value > info["value"]:
+            t = cand
+            info.update(value=value, start="core")
+    return t

@@ -70,12 +70,15 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
+import scipy.sparse as sp
+from scipy.linalg.blas import ssymv
 from scipy.optimize import linear_sum_assignment
+from scipy.sparse.linalg import LinearOperator, eigsh
 
-from shapecond.checks import check_distance_matrix
+from shapecond._options import merge_options, with_options
 from shapecond.errors import InputError, TooLargeError
 from shapecond.matching import refine as R
-from shapecond.matching.candidates import Candidates, band_candidates, k_best_candidates
+from shapecond.matching.candidates import Candidates, band_candidates, check_distances, k_best_candidates
 from shapecond.matching.nested import core_size, with_landmarks
 
 #: refuse dense affinity matrices above this many bytes (float32)
@@ -112,7 +115,8 @@ def default_sigma(D_source: np.ndarray, factor: float = 1.0) -> float:
 
 
 @numba.njit(parallel=True, cache=True)
-def _affinity_kernel(Ds, Dt, src, tgt, t0, r2, iw2, cut2):
+def _affinity_kernel(Ds, Dt, src, tgt, kp):
+    """M over every pair of candidates (``src[i] -> tgt[i]``) for the kernel ``kp``, dense, float32."""
     C = src.size
     M = np.empty((C, C), dtype=np.float32)
     for i in numba.prange(C):
@@ -122,22 +126,26 @@ def _affinity_kernel(Ds, Dt, src, tgt, t0, r2, iw2, cut2):
             if x == x2 or y == y2:
                 M[i, j] = 0.0
             else:
-                M[i, j] = R._k(Ds[x, x2], Dt[y, y2], t0, r2, iw2, cut2)
+                M[i, j] = R._k(Ds[x, x2], Dt[y, y2], kp)
     return M
 
 
 @numba.njit(cache=True, nogil=True)
-def _sparse_affinity_kernel(indices, data, Ds, Dt, src, tgt, order, starts, near, t0, r2, iw2, cut2):
-    """CSR pattern and values of M for a kernel of finite support, in one pass; returns indptr.
+def _sparse_affinity_kernel(out, Ds, Dt, cand, by_source, near, kp):
+    """CSR pattern and values of M for a kernel ``kp`` of finite support, in one pass; returns indptr.
 
-    ``order[starts[x]:starts[x + 1]]`` lists the candidates of source sample ``x``;
-    ``near[x]`` the other source samples within the kernel's support (-1 padded).
-    Row ``i`` (candidate ``x -> y``) holds, for each ``x2`` of ``near[x]`` in turn and
-    each candidate ``j`` of ``x2`` with another target, ``K(D_s[x, x2], D_t[y, tgt[j]])``
-    when positive.  Rows are written (branch-free) one after the other into
-    ``indices`` and ``data``, which hold at least the total of the rows' upper bounds
+    ``cand = (src, tgt)``: candidate ``i`` is ``src[i] -> tgt[i]``; with ``by_source =
+    (order, starts)``, ``order[starts[x]:starts[x + 1]]`` lists the candidates of source
+    sample ``x``; ``near[x]`` the other source samples within the kernel's support (-1
+    padded).  Row ``i`` (candidate ``x -> y``) holds, for each ``x2`` of ``near[x]`` in
+    turn and each candidate ``j`` of ``x2`` with another target, ``K(D_s[x, x2], D_t[y,
+    tgt[j]])`` when positive.  Rows are written (branch-free) one after the other into
+    ``out = (indices, data)``, which hold at least the total of the rows' upper bounds
     (the candidates of the neighbours).
     """
+    indices, data = out
+    src, tgt = cand
+    order, starts = by_source
     C = src.size
     indptr = np.zeros(C + 1, dtype=np.int64)
     p = 0
@@ -153,7 +161,7 @@ def _sparse_affinity_kernel(indices, data, Ds, Dt, src, tgt, order, starts, near
                 j = order[r]
                 y2 = tgt[j]
                 if y2 != y:
-                    v = R._k(d, Dt[y, y2], t0, r2, iw2, cut2)
+                    v = R._k(d, Dt[y, y2], kp)
                     indices[p] = j
                     data[p] = v
                     p += 1 if v > 0.0 else 0
@@ -173,33 +181,27 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
     """
     kernel = kernel if isinstance(kernel, R.Kernel) else R.Kernel(float(kernel))
     C = cand.size
+    Ds = np.ascontiguousarray(D_source, dtype=np.float64)
+    Dt = np.ascontiguousarray(D_target, dtype=np.float64)
+    src, tgt = np.ascontiguousarray(cand.source), np.ascontiguousarray(cand.target)
+    kp = kernel.params()
     if compiled and np.isfinite(kernel.radius):
-        import scipy.sparse as sp
-
-        Ds = np.ascontiguousarray(D_source, dtype=np.float64)
-        src, tgt = np.ascontiguousarray(cand.source), np.ascontiguousarray(cand.target)
         order = np.argsort(src, kind="stable")
         starts = np.searchsorted(src[order], np.arange(Ds.shape[0] + 1))
-        t0, r2, iw2, cut2 = kernel.params()
-        near = R.support_lists(Ds, cut2)
+        near = R.support_lists(Ds, kp[3])
         # room for every row's upper bound, allocated by NumPy (huge pages: few page faults)
         counts = np.diff(starts)
         bound = int(np.where(near >= 0, counts[np.maximum(near, 0)], 0).sum(axis=1)[src].sum())
         indices = np.empty(bound, dtype=np.int32)
         data = np.empty(bound, dtype=np.float32)
-        indptr = _sparse_affinity_kernel(
-            indices, data, Ds, np.ascontiguousarray(D_target, dtype=np.float64), src, tgt, order,
-            starts, near, t0, r2, iw2, cut2)
+        indptr = _sparse_affinity_kernel((indices, data), Ds, Dt, (src, tgt), (order, starts), near, kp)
         return sp.csr_matrix((data[:indptr[-1]], indices[:indptr[-1]], indptr), shape=(C, C))
     if 4 * C * C > MAX_AFFINITY_BYTES:
         raise TooLargeError(
             f"{C} candidates need a {4 * C * C / 2**30:.1f} GB affinity matrix; lower k or N")
-    Ds = np.ascontiguousarray(D_source, dtype=np.float64)
-    Dt = np.ascontiguousarray(D_target, dtype=np.float64)
-    src, tgt = np.ascontiguousarray(cand.source), np.ascontiguousarray(cand.target)
-    t0, r2, iw2, cut2 = kernel.params()
     if compiled:
-        return _affinity_kernel(Ds, Dt, src, tgt, t0, r2, iw2, cut2)
+        return _affinity_kernel(Ds, Dt, src, tgt, kp)
+    t0, r2, iw2, cut2 = kp
     M = np.empty((C, C), dtype=np.float32)
     for lo in range(0, C, block):
         hi = min(C, lo + block)
@@ -229,8 +231,6 @@ def principal_eigenvector(M: np.ndarray, tol: float = 1e-7, max_iter: int = 500,
     iterations : int
     converged : bool
     """
-    from scipy.linalg.blas import ssymv
-
     C = M.shape[0]
     v = np.full(C, 1.0, dtype=np.float32) if v0 is None else np.asarray(v0, dtype=np.float32).copy()
     v /= max(float(np.linalg.norm(v)), 1e-30)
@@ -255,8 +255,6 @@ def lanczos_perron_vector(M: np.ndarray, v0=None, tol: float = 1e-6):
     the refined rounds (small spectral gap) that was 100+ products against
     about 20 here.  Returns ``(v, products, True)`` with ``v ≥ 0``, unit norm.
     """
-    from scipy.sparse.linalg import LinearOperator, eigsh
-
     calls = [0]
 
     def matvec(x):
@@ -329,11 +327,44 @@ def fine_kernel(h: float) -> R.Kernel:
     return R.Kernel(0.5 * h, 0.0, 3.0 * h)
 
 
-def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: int = 20,
-               sigma: float | None = None, sigma_factor: float = 2.0,
-               rounding: str = "assignment", refine: bool = True, rounds: int = 3,
-               quantile_weight: float = 0.5, tol: float = 1e-7, max_iter: int = 500,
-               nested: bool = True) -> SampleMatch:
+@dataclass(frozen=True)
+class LH05Options:
+    """The options of ``lh05_match`` (module docstring, steps 1-6).
+
+    Attributes
+    ----------
+    k : candidates per source sample.
+    sigma : width ``s`` of the first round's Gaussian affinity; default
+        ``sigma_factor × h`` (step 2).
+    sigma_factor : see ``sigma``.
+    rounding : "assignment" (linear assignment) or "greedy" (LH05's greedy discretisation).
+    refine : step 5; ``refine=False, rounding="greedy"`` is the plain LH05 of the paper.
+    rounds : at most this many spectral rounds on candidates iterated from the map.
+    quantile_weight : weight of the intrinsic part of the descriptors (``candidates``).
+    tol, max_iter : of the first round's power iteration.
+    nested : step 6: with more than three landmarks and ``refine``, also match with the
+        first three (this very function), send that map to the other landmarks, refine it
+        and keep the larger objective (``nested``).
+    """
+
+    k: int = 20
+    sigma: float | None = None
+    sigma_factor: float = 2.0
+    rounding: str = "assignment"
+    refine: bool = True
+    rounds: int = 3
+    quantile_weight: float = 0.5
+    tol: float = 1e-7
+    max_iter: int = 500
+    nested: bool = True
+
+    def __post_init__(self):
+        if self.rounding not in ("greedy", "assignment"):
+            raise InputError(f"unknown rounding {self.rounding!r} (greedy or assignment)")
+
+
+@with_options(LH05Options)
+def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), options=None, **kw) -> SampleMatch:
     """Leordeanu–Hebert spectral matching with landmarks, source to target.
 
     Parameters
@@ -344,24 +375,9 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
         Target sample distances, same units.
     landmarks_source, landmarks_target : sequences of int
         Corresponding landmark sample indices; they stay fixed.
-    k : int
-        Candidates per source sample.
-    sigma : float, optional
-        Width ``s`` of the first round's Gaussian affinity; default
-        ``sigma_factor × h`` (module docstring, step 2).
-    rounding : {"assignment", "greedy"}
-        Linear-assignment rounding or LH05's greedy discretisation.
-    refine : bool
-        Steps 5 of the module docstring; ``refine=False, rounding="greedy"`` is
-        the plain LH05 of the paper.
-    rounds : int
-        At most this many spectral rounds on candidates iterated from the map.
-    nested : bool
-        With more than three landmarks and ``refine``, also match with the first
-        three (this very function), send that map to the other landmarks, refine
-        it and keep the larger objective (``nested``): ``info["objective"]`` is
-        then at least that of the map matched with the first three landmarks
-        whenever that map sends the others to their images.
+    options : LH05Options, optional
+        ``k``, ``sigma``, ``rounding``, ``refine``, ``rounds``, ``nested``...; each of its
+        fields may also be given as a keyword argument (``k=10``).
 
     Returns
     -------
@@ -370,51 +386,66 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
         ``info["objective"]`` is the local-kernel objective of ``t`` (refined runs);
         ``info["start"]`` says whether ``t`` came from this problem's own
         spectral start (``"spectral"``) or from the first three landmarks'
-        map (``"core"``).
+        map (``"core"``).  With ``nested``, ``info["objective"]`` is at least that
+        of the map matched with the first three landmarks whenever that map sends
+        the others to their images.
     """
-    if rounding not in ("greedy", "assignment"):
-        raise InputError(f"unknown rounding {rounding!r} (greedy or assignment)")
+    opts = merge_options(LH05Options, options, kw, "lh05_match")
     t0 = time.perf_counter()
-    check_distance_matrix(D_source, "source distances")  # one clear error for NaN, inf, asymmetry...
-    check_distance_matrix(D_target, "target distances")
-    D_source = np.asarray(D_source, dtype=np.float64)
-    D_target = np.asarray(D_target, dtype=np.float64)
-    n_s, n_t = D_source.shape[0], D_target.shape[0]
-    cand = k_best_candidates(D_source, D_target, landmarks_source, landmarks_target, k,
-                             quantile_weight)
-    h = default_sigma(D_source, 1.0)
-    s = sigma_factor * h if sigma is None else float(sigma)
+    run = _LH05(*check_distances(D_source, D_target), opts)
+    cand = k_best_candidates(run.Ds, run.Dt, landmarks_source, landmarks_target, opts.k, opts.quantile_weight)
+    h = default_sigma(run.Ds, 1.0)
+    s = opts.sigma_factor * h if opts.sigma is None else float(opts.sigma)
     if not s > 0:
         raise InputError("the affinity width sigma must be positive")
+    t, (iters, conv) = run.spectral_round(cand, s)
+    info = dict(k=opts.k, candidates=cand.size, sigma=s, iterations=iters, converged=conv,
+                rounding=opts.rounding, refine=opts.refine)
+    if opts.refine and h > 0:
+        t, cand = run.refined(t, cand, h, info)
+    info["seconds"] = time.perf_counter() - t0
+    return SampleMatch(t, "lh05", info, cand)
 
-    def spectral_round(cand, kernel, start=None):
-        M = affinity_matrix(D_source, D_target, cand, kernel)
+
+class _LH05:
+    """The distances of one ``lh05_match`` problem, its options and its steps (module docstring)."""
+
+    def __init__(self, Ds, Dt, opts):
+        self.Ds, self.Dt, self.opts = Ds, Dt, opts
+
+    def spectral_round(self, cand, kernel, start=None):
+        """Steps 2-4: the affinity of ``cand``, its Perron vector (power iteration; Lanczos from
+        ``start``, a map, in the refined rounds), rounded and completed.  Returns (map,
+        (iterations, converged))."""
+        Ds, Dt, opts = self.Ds, self.Dt, self.opts
+        M = affinity_matrix(Ds, Dt, cand, kernel)
         if start is None:
-            v, iters, conv = principal_eigenvector(M, tol, max_iter)
+            v, iters, conv = principal_eigenvector(M, opts.tol, opts.max_iter)
         else:  # local affinities have a small spectral gap: Lanczos, not power iteration
             v, iters, conv = lanczos_perron_vector(M, 0.1 + (start[cand.source] == cand.target))
         del M
-        rounded = (greedy_discretisation(cand, v, n_s) if rounding == "greedy"
+        n_s, n_t = Ds.shape[0], Dt.shape[0]
+        rounded = (greedy_discretisation(cand, v, n_s) if opts.rounding == "greedy"
                    else assignment_rounding(cand, v, n_s, n_t))
-        return complete_map(D_source, D_target, rounded), (iters, conv)
+        return complete_map(Ds, Dt, rounded), (iters, conv)
 
-    t, (iters, conv) = spectral_round(cand, s)
-    info = dict(k=k, candidates=cand.size, sigma=s, iterations=iters, converged=conv,
-                rounding=rounding, refine=refine)
-    if refine and h > 0:
-        free = np.setdiff1d(np.arange(n_s), cand.landmarks_source)
-        knn = R.neighbours(D_target, max(k, 64))
-        iu = np.triu_indices(n_s, 1)
-        ds = D_source[iu]
-        rel = np.abs(ds - D_target[t][:, t][iu]) / np.maximum(ds, h)
+    def refined(self, t, cand, h, info):
+        """Steps 5 and 6 from the rounded map ``t``: (map, candidates of the round that produced
+        it); ``info`` receives the objective and where the map came from."""
+        Ds, Dt, opts = self.Ds, self.Dt, self.opts
+        free = np.setdiff1d(np.arange(Ds.shape[0]), cand.landmarks_source)
+        knn = R.neighbours(Dt, max(opts.k, 64))
+        iu = np.triu_indices(Ds.shape[0], 1)
+        ds = Ds[iu]
+        rel = np.abs(ds - Dt[t][:, t][iu]) / np.maximum(ds, h)
         coarse = R.Kernel(h, 2.0 * float(np.median(rel)))
         fine = fine_kernel(h)
-        t, _ = R.polish(D_source, D_target, t, free, coarse, knn)
+        t, _ = R.polish(Ds, Dt, t, free, coarse, knn)
         best = None
-        for _ in range(max(rounds, 1)):
-            c = band_candidates(t, knn, cand.landmarks_source, cand.landmarks_target, k)
-            t_r, _ = spectral_round(c, fine, t)
-            t_r, f = R.refine(D_source, D_target, t_r, free, fine, knn)
+        for _ in range(max(opts.rounds, 1)):
+            c = band_candidates(t, knn, cand.landmarks_source, cand.landmarks_target, opts.k)
+            t_r, _ = self.spectral_round(c, fine, t)
+            t_r, f = R.refine(Ds, Dt, t_r, free, fine, knn)
             if best is not None and not f > best[1]:
                 break
             best = (t_r, f, c)
@@ -422,16 +453,12 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), k: 
         t, f, cand = best
         info.update(objective=f, coarse_rel=coarse.rel, h=h, candidates=cand.size, start="spectral")
         n_core = core_size(cand.landmarks_source.size)
-        if nested and n_core:
+        if opts.nested and n_core:  # 6. the first three landmarks' map, sent to the others
             ls, lt = cand.landmarks_source, cand.landmarks_target
-            core = lh05_match(D_source, D_target, ls[:n_core], lt[:n_core], k=k, sigma=sigma,
-                              sigma_factor=sigma_factor, rounding=rounding, refine=refine,
-                              rounds=rounds, quantile_weight=quantile_weight, tol=tol,
-                              max_iter=max_iter, nested=nested)
-            t_c, f_c = R.refine(D_source, D_target, with_landmarks(core.t, ls, lt), free, fine, knn)
+            core = lh05_match(Ds, Dt, ls[:n_core], lt[:n_core], opts)
+            t_c, f_c = R.refine(Ds, Dt, with_landmarks(core.t, ls, lt), free, fine, knn)
             if f_c > f:
                 t, f = t_c, f_c
                 cand = core.candidates
                 info.update(objective=f, candidates=cand.size, start="core")
-    info["seconds"] = time.perf_counter() - t0
-    return SampleMatch(t, "lh05", info, cand)
+        return t, cand

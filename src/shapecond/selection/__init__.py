@@ -18,43 +18,74 @@
 
 from __future__ import annotations
 
+import inspect
 import math
 import time
+from dataclasses import dataclass, fields
 
+from .._options import with_options
 from ..errors import InputError
 from ..limits import single_blas_thread
+from .fps import fps_landmarks
+from .pls import pls_landmarks
 from .result import LandmarkSelection, make_result, sample_of_vertex
+from .user import user_landmarks
+
+# The score-based methods (cnbs, cnbs-scale, the scores after each landmark) need the compiled
+# witness search (numba), hks a Laplace-Beltrami basis and cnbs-local the deformation energy:
+# they are imported when used, so that importing this package (the command line does) stays light.
 
 METHODS = ("cnbs", "cnbs-scale", "cnbs-local", "fps", "pls", "hks", "user")
 #: Which score follows each landmark: σ (Eq. 5) or δ(ε) (``shapecond.symmetry.scale``).
 SCORES = ("sigma", "scale")
 
 
+@dataclass(frozen=True)
+class LandmarkOptions:
+    """The options of ``select_landmarks`` that every method takes.
+
+    Attributes
+    ----------
+    scores : compute the score after each landmark for the baselines (k witness searches);
+        default True for "cnbs" (free: the heat map gives them), False otherwise.
+    effort : effort of the witness searches ("quick", "default", "thorough").
+    fixed : sample indices fixed before selection (they are not reported again).
+    score : "sigma" or "scale", the score reported after each landmark; default "scale"
+        for "cnbs-scale", "sigma" otherwise (cnbs always reports σ).
+    epsilon : distortion level of the scale-aware score (default:
+        ``symmetry.scale.default_epsilon``).
+    """
+
+    scores: bool | None = None
+    effort: str = "default"
+    fixed: tuple = ()
+    score: str | None = None
+    epsilon: float | None = None
+
+
 #: Keyword options of ``select_landmarks`` itself, which every method takes.
-COMMON_OPTIONS = ("scores", "effort", "fixed", "score", "epsilon")
+COMMON_OPTIONS = tuple(f.name for f in fields(LandmarkOptions))
 
 
 def method_options(method: str) -> frozenset:
-    """The keyword options ``select_landmarks`` takes with ``method``, read from the signatures of
-    the methods (``COMMON_OPTIONS`` and the method's own, e.g. ``resolve_fraction`` for cnbs)."""
-    import inspect
+    """The keyword options ``select_landmarks`` takes with ``method``: ``COMMON_OPTIONS`` and the
+    method's own (for cnbs the fields of ``CNBSOptions``, e.g. ``resolve_fraction``; for the
+    others the parameters of the method's function)."""
 
     def own(f, *taken):
         return set(inspect.signature(f).parameters) - set(taken)
 
     if method in ("cnbs", "cnbs-scale"):
-        from .cnbs import cnbs_landmarks
+        from .cnbs import CNBSOptions  # numba: see the note on imports above
 
-        extra = own(cnbs_landmarks, "D", "n_samples", "k", "fixed", "seed", "effort", "budget")
+        extra = {f.name for f in fields(CNBSOptions)} - {"seed", "effort"} | {"progress", "base", "options"}
     elif method == "cnbs-local":
         extra = own(_local_landmarks, "shape", "k", "fixed")
     elif method == "hks":
-        from .hks import hks_landmarks
+        from .hks import hks_landmarks  # a Laplace-Beltrami basis: see the note on imports above
 
         extra = own(hks_landmarks, "shape", "k", "seed")
     elif method == "user":
-        from .user import user_landmarks
-
         extra = own(user_landmarks, "shape")
     else:
         extra = set()
@@ -86,7 +117,7 @@ def monotone(values) -> list:
 def prefix_scores(shape, sample_indices, fixed=(), seed: int = 0, effort: str = "default",
                   score: str = "sigma", epsilon=None) -> list[float]:
     """σ (Eq. 5) or δ(ε) (lower bounds with witness) with the first 1, 2, ... landmarks fixed."""
-    from ..symmetry.scale import scale_score
+    from ..symmetry.scale import scale_score  # numba: see the note on imports above
     from ..symmetry.search import witness_search
 
     out, L = [], [int(v) for v in fixed]
@@ -107,7 +138,7 @@ def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
     (greedy on the local score σ_∞ of paper Section 5); the scores reported are local
     scores, not the global σ.  ``sample_indices`` are the samples standing for them.
     """
-    from ..deformation.heatmap import select_local_landmarks
+    from ..deformation.heatmap import select_local_landmarks  # see the note on imports above
     from ..deformation.local_score import LocalProblem
 
     g = shape.geometry
@@ -121,10 +152,45 @@ def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
     return verts, list(res.scores), float(res.initial)
 
 
+def _cnbs(shape, k, method, seed, common, score, kw):
+    """CNBS on σ ("cnbs") or on δ(ε) ("cnbs-scale"): (samples, scores, initial score, heat maps,
+    what the scores are); scores None when σ is asked for after cnbs-scale."""
+    from ..symmetry.scale import budget_of, default_epsilon  # numba: see the note on imports above
+    from .cnbs import cnbs_landmarks
+
+    n, D = int(shape.n_samples), shape.D
+    if method == "cnbs":
+        out = cnbs_landmarks(D, n, k, fixed=common.fixed, seed=seed, effort=common.effort, **kw)
+        return out["landmarks"], out["scores"], out["initial_score"], tuple(out["heat_maps"]), "sigma"
+    eps = default_epsilon(D, n) if common.epsilon is None else float(common.epsilon)
+    out = cnbs_landmarks(D, n, k, fixed=common.fixed, seed=seed, effort=common.effort,
+                         budget=budget_of(eps, n, D), **kw)
+    if score == "sigma":  # σ after each landmark (computed by the caller when asked for)
+        return out["landmarks"], None, None, tuple(out["heat_maps"]), score
+    # heat-map values are sqrt(d²): RMS displacement δ = value / sqrt(N)
+    sc = monotone([v / math.sqrt(n) for v in out["scores"]])
+    initial = max(out["initial_score"] / math.sqrt(n), sc[0] if sc else 0.0)
+    return out["landmarks"], sc, initial, tuple(out["heat_maps"]), score
+
+
+def _baseline(shape, k, method, seed, fixed, kw) -> list:
+    """The samples chosen by fps, pls, hks or user."""
+    n = int(shape.n_samples)
+    if method == "fps":
+        return fps_landmarks(shape.D, n, k, seed=seed, fixed=fixed)
+    if method == "pls":
+        return pls_landmarks(shape.D, n, k, fixed=fixed)[0]
+    if method == "hks":
+        from .hks import hks_landmarks  # a Laplace-Beltrami basis: see the note on imports above
+
+        return hks_landmarks(shape, k, seed=seed, **kw)[0]
+    chosen = user_landmarks(shape, **kw)
+    return chosen[:k] if k else chosen
+
+
 @single_blas_thread
-def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scores: bool | None = None,
-                     effort: str = "default", fixed=(), score: str | None = None, epsilon=None,
-                     **kw) -> LandmarkSelection:
+@with_options(LandmarkOptions, more=True)
+def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, **kw) -> LandmarkSelection:
     """Choose ``k`` landmarks on ``shape`` with ``method``.
 
     Parameters
@@ -133,82 +199,44 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, *, scor
     k : int, number of landmarks (for ``"user"``: at most the number given; 0 = all).
     method : one of ``METHODS``.
     seed : int, for every random choice (FPS start, search starts).
-    scores : compute σ after each landmark for the baselines (k witness searches);
-        default True for "cnbs" (free: the heat map gives them), False otherwise.
-    effort : effort of the witness searches ("quick", "default", "thorough").
-    fixed : sample indices fixed before selection (they are not reported again).
-    score : "sigma" or "scale", the score reported after each landmark; default
-        "scale" for "cnbs-scale", "sigma" otherwise (cnbs always reports σ).
-    epsilon : distortion level of the scale-aware score (default:
-        ``symmetry.scale.default_epsilon``).
-    **kw : method options: cnbs (``resolve_fraction``, ``resolve``, ``n_maps``,
-        ``progress``, ``keep_heat_maps``), cnbs-local (``alpha``, ``energy``, ``refine``),
-        hks (``time_fraction``, ``n_eigs``),
-        user (``ids`` or ``path``).
+    **kw : the options every method takes (``LandmarkOptions``: ``scores``, ``effort``,
+        ``fixed``, ``score``, ``epsilon``) and the method's own: cnbs (the fields of
+        ``cnbs.CNBSOptions``: ``resolve_fraction``, ``resolve``, ``n_maps``, ``n_kicks``,
+        ``n_cross``, ``max_verify``, ``keep_heat_maps``..., and ``progress``), cnbs-local
+        (``alpha``, ``energy``, ``refine``), hks (``time_fraction``, ``n_eigs``), user
+        (``ids`` or ``path``).
 
     Returns
     -------
     LandmarkSelection
     """
     check_method_options(method, kw)
-    score = score or ("scale" if method == "cnbs-scale" else "sigma")
+    kw = dict(kw)
+    common = LandmarkOptions(**{key: kw.pop(key) for key in COMMON_OPTIONS if key in kw})
+    score = common.score or ("scale" if method == "cnbs-scale" else "sigma")
     if score not in SCORES:
         raise InputError(f"unknown score {score!r}; choose sigma or scale")
     n = int(shape.n_samples)
-    if method != "user" and not 1 <= k <= n - len(fixed) - 1:
-        raise InputError(f"k must lie between 1 and {n - len(fixed) - 1} for {n} samples, got {k}")
+    if method != "user" and not 1 <= k <= n - len(common.fixed) - 1:
+        raise InputError(f"k must lie between 1 and {n - len(common.fixed) - 1} for {n} samples, got {k}")
     t0 = time.perf_counter()
-    initial, heat_maps, sc = None, (), None
-    if method == "cnbs":
-        from .cnbs import cnbs_landmarks
-
-        out = cnbs_landmarks(shape.D, n, k, fixed=fixed, seed=seed, effort=effort, **kw)
-        chosen, sc, initial = out["landmarks"], out["scores"], out["initial_score"]
-        heat_maps = tuple(out["heat_maps"])
-        score = "sigma"
-    elif method == "cnbs-scale":
-        from ..symmetry.scale import budget_of, default_epsilon
-        from .cnbs import cnbs_landmarks
-
-        eps = default_epsilon(shape.D, n) if epsilon is None else float(epsilon)
-        out = cnbs_landmarks(shape.D, n, k, fixed=fixed, seed=seed, effort=effort,
-                             budget=budget_of(eps, n, shape.D), **kw)
-        # heat-map values are sqrt(d²): RMS displacement δ = value / sqrt(N)
-        chosen = out["landmarks"]
-        sc = monotone([v / math.sqrt(n) for v in out["scores"]])
-        initial = max(out["initial_score"] / math.sqrt(n), sc[0] if sc else 0.0)
-        heat_maps = tuple(out["heat_maps"])
-        if score == "sigma":  # σ after each landmark (computed below when asked for)
-            sc, initial = None, None
-    elif method == "cnbs-local":
-        verts, sc, initial = _local_landmarks(shape, k, fixed, **kw)
+    if method == "cnbs-local":
+        verts, sc, initial = _local_landmarks(shape, k, common.fixed, **kw)
         samples = [sample_of_vertex(shape, v) for v in verts]
         ids = [int(shape.geometry.ids[v]) for v in verts]
         return LandmarkSelection(tuple(ids), tuple(samples), tuple(verts), tuple(float(v) for v in sc), method,
-                              time.perf_counter() - t0, initial, shape=shape)
-    elif method == "fps":
-        from .fps import fps_landmarks
-
-        chosen = fps_landmarks(shape.D, n, k, seed=seed, fixed=fixed)
-    elif method == "pls":
-        from .pls import pls_landmarks
-
-        chosen, _ = pls_landmarks(shape.D, n, k, fixed=fixed)
-    elif method == "hks":
-        from .hks import hks_landmarks
-
-        chosen, _ = hks_landmarks(shape, k, seed=seed, **kw)
+                                 time.perf_counter() - t0, initial, shape=shape)
+    initial, heat_maps, sc = None, (), None
+    if method in ("cnbs", "cnbs-scale"):
+        chosen, sc, initial, heat_maps, score = _cnbs(shape, k, method, seed, common, score, kw)
     else:
-        from .user import user_landmarks
-
-        chosen = user_landmarks(shape, **kw)
-        if k:
-            chosen = chosen[:k]
+        chosen = _baseline(shape, k, method, seed, common.fixed, kw)
     if sc is None:
-        want = scores if scores is not None else False
-        sc = prefix_scores(shape, chosen, fixed, seed, effort, score, epsilon) if want else [None] * len(chosen)
+        want = common.scores if common.scores is not None else False
+        sc = (prefix_scores(shape, chosen, common.fixed, seed, common.effort, score, common.epsilon) if want
+              else [None] * len(chosen))
     return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps, score)
 
 
-__all__ = ["LandmarkSelection", "METHODS", "SCORES", "check_method_options", "method_options", "monotone",
-           "prefix_scores", "select_landmarks"]
+__all__ = ["COMMON_OPTIONS", "LandmarkOptions", "LandmarkSelection", "METHODS", "SCORES", "check_method_options",
+           "method_options", "monotone", "prefix_scores", "select_landmarks"]

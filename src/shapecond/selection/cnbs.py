@@ -83,12 +83,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._options import merge_options, with_options
 from ..checks import check_landmark_count
 from ..errors import InputError
 from ..limits import single_blas_thread
-from ..symmetry.objective import ISOMETRY_RTOL
+from ..symmetry.objective import isometry_floor, swap_terms
+from ..symmetry.scale import resolution
+from ..symmetry.search import witness_search
 from ..threads import thread_map
-from .warm import WarmPolisher, _search_module
+from .warm import WarmPolisher
 
 #: Share of the candidates, those moved farthest by the witness maps, that get a
 #: full re-solve in every heat map (20 % kept the argmin at N = 400 in the prototype).
@@ -99,24 +102,68 @@ N_MAPS = 4
 N_KICKS = 6
 #: Up to this N the leaders of a heat map are verified by a fresh witness_search.
 FULL_VERIFY_N = 200
+#: Donors of the leader verification: the best maps of this many highest-valued candidates.
+N_CROSS = 24
+#: Rounds of leader verification at most.
+MAX_VERIFY = 8
 #: Candidates of an unpruned heat map searched at once by parallel threads.
 CHUNK = 8
+
+
+@dataclass(frozen=True)
+class HeatMapOptions:
+    """How a CNBS heat map is computed (module docstring, steps 2-6).
+
+    Attributes
+    ----------
+    seed, effort : of the witness searches (the base search, full re-solves, verification).
+    n_maps : best distinct witness maps used as warm starts (``N_MAPS``).
+    resolve_fraction : share of candidates (moved farthest) re-solved; 1.0 re-solves all.
+    resolve : "ils" (``n_kicks`` random kicks of the repaired base maps, each polished) or
+        "full" (a fresh ``witness_search`` with ``effort``, seconds per candidate at N = 400).
+    n_kicks : kicked restarts per re-solved candidate (``N_KICKS``).
+    n_cross : donors of the leader verification (``N_CROSS``).
+    max_verify : rounds of leader verification at most (``MAX_VERIFY``).
+    prune : stop each candidate's search once its value passes the incumbent (step 6):
+        the same argmin for a fraction of the work, but the values of the ``pruned``
+        candidates are weaker lower bounds.  Off for pictures.
+    """
+
+    seed: int = 0
+    effort: str = "default"
+    n_maps: int = N_MAPS
+    resolve_fraction: float = RESOLVE_FRACTION
+    resolve: str = "ils"
+    n_kicks: int = N_KICKS
+    n_cross: int = N_CROSS
+    max_verify: int = MAX_VERIFY
+    prune: bool = False
+
+    def __post_init__(self):
+        if self.resolve not in ("ils", "full"):
+            raise InputError(f"resolve must be 'ils' or 'full', got {self.resolve!r}")
+        if not 0.0 <= self.resolve_fraction <= 1.0:
+            raise InputError("resolve fraction must lie in [0, 1]")
+
+
+@dataclass(frozen=True)
+class CNBSOptions(HeatMapOptions):
+    """``HeatMapOptions`` of greedy CNBS (``cnbs_landmarks``): its heat maps are pruned by
+    default (only their argmins are used), and ``keep_heat_maps`` keeps them in the result."""
+
+    prune: bool = True
+    keep_heat_maps: bool = False
 
 
 def swap_scores(D: np.ndarray, n: int) -> np.ndarray:
     """σ of every single swap (a b) of the identity on the samples: (n, n), 0 on the diagonal.
 
-    Swapping a and b gives d² = 2 D[a,b]² and Dist² = 4 Σ_{c ≠ a,b} (D[a,c] − D[b,c])²
-    (ordered pairs, columns over X), so σ_ab² = D[a,b]² / (2 Σ_c ...).  A swap with
-    round-off distortion (``objective.is_isometry``) scores inf.
+    σ_ab = sqrt(d² / Dist²) of the swap (Eq. 5) from ``objective.swap_terms``; a swap
+    with round-off distortion (``objective.isometry_floor``) scores inf.
     """
     Dx = np.asarray(D, float)[:n, :n]
-    sq = (Dx**2).sum(axis=1)
-    row = sq[:, None] + sq[None, :] - 2.0 * Dx @ Dx  # ‖D_a − D_b‖² (Dx symmetric)
-    dist2 = 4.0 * np.maximum(row - 2.0 * Dx**2, 0.0)
-    d2 = 2.0 * Dx**2
-    scale2 = float((Dx**2).sum())
-    iso = dist2 <= ISOMETRY_RTOL**2 * scale2  # round-off distortion: an isometry
+    d2, dist2 = swap_terms(Dx, np.arange(n))
+    iso = dist2 <= isometry_floor(Dx)  # round-off distortion: an isometry
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.sqrt(d2 / np.where(iso, 1.0, dist2))
     s[iso & (d2 > 0)] = np.inf
@@ -129,8 +176,6 @@ def swap_table(D: np.ndarray, n: int, budget=None) -> np.ndarray:
     or with a Dist² ``budget`` sqrt(d²) = sqrt(2)·D[a,b] for the swaps within it and 0 for the others."""
     if budget is None:
         return swap_scores(D, n)
-    from ..symmetry.search import swap_terms
-
     num, den = swap_terms(np.asarray(D, float)[:n, :n], np.arange(n))
     S = np.where(den <= budget, np.sqrt(num), 0.0)
     np.fill_diagonal(S, 0.0)
@@ -220,10 +265,9 @@ def _maps_of(res, n_maps):
 
 
 @single_blas_thread
-def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: str = "default",
-             n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
-             resolve: str = "ils", n_kicks: int = N_KICKS, n_cross: int = 24, max_verify: int = 8,
-             prune: bool = False, progress=None, budget=None) -> HeatMap:
+@with_options(HeatMapOptions)
+def heat_map(D, n_samples=None, landmarks=(), base=None, budget=None, progress=None, options=None,
+             **kw) -> HeatMap:
     """The CNBS heat map: σ (lower bound) with each candidate sample fixed.
 
     Parameters
@@ -231,177 +275,188 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, seed: int = 0, effort: 
     D : (M, M) array; the first ``n_samples`` points are the samples X.
     landmarks : sample indices already fixed.
     base : SearchResult of ``witness_search`` with ``landmarks`` fixed (computed when None).
-    effort : effort of the base search and of the full re-solves (warm starts are polished only).
-    resolve_fraction : share of candidates (moved farthest) re-solved; 1.0 re-solves all.
-    resolve : "ils" (default: ``n_kicks`` random kicks of the repaired base maps, each
-        polished) or "full" (a fresh ``witness_search``
-        with ``effort``, seconds per candidate at N = 400).
-    prune : stop each candidate's search once its value passes the incumbent (step 6 of
-        the module docstring): the same argmin for a fraction of the work, but the
-        values of the ``pruned`` candidates are weaker lower bounds.  Off for pictures.
-    progress : callable(done, total) or None.
     budget : None for σ (Eq. 5); a Dist² budget for the scale-aware score
         (``shapecond.symmetry.scale``): values are then sqrt(d²) of the widest map
         within the budget fixing each candidate (δ(ε) = value / sqrt(N)), and values
         within sqrt(N)·``scale.resolution`` of the smallest tie (module docstring).
+    progress : callable(done, total) or None.
+    options : HeatMapOptions (seed, effort, warm maps, re-solves, verification, pruning);
+        each of its fields may also be given as a keyword argument (``seed=1``).
     """
     t0 = time.perf_counter()
-    search = _search_module()
+    opts = merge_options(HeatMapOptions, options, kw, "heat_map")
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
     n = D.shape[0] if n_samples is None else int(n_samples)
     L = [int(v) for v in landmarks]
     if len(set(L)) != len(L) or any(not 0 <= v < n for v in L):
         raise InputError("landmarks must be distinct sample indices")
-    if resolve not in ("ils", "full"):
-        raise InputError(f"resolve must be 'ils' or 'full', got {resolve!r}")
-    if not 0.0 <= resolve_fraction <= 1.0:
-        raise InputError("resolve fraction must lie in [0, 1]")
     if base is None:
-        base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort, budget=budget)
-    sigma0 = float(base.sigma)
-    maps = _maps_of(base, n_maps)
-    cand = np.array([p for p in range(n) if p not in set(L)], dtype=np.int64)
-    if cand.size == 0:
-        raise InputError("every sample is already a landmark")
-    values = np.full(n, np.nan)
-    moved = np.zeros(n)
-    for t in maps:
-        moved = np.maximum(moved, D[np.arange(n), t])
-    floor = np.zeros(n)
-    floor[cand] = best_swap_avoiding(swap_table(D, n, budget), L, cand)
-    results = {}
-    best_t = maps[0]
-    polish = WarmPolisher(D, n, maps, L, budget)
-    n_full = int(math.ceil(resolve_fraction * cand.size))
-    order = cand[np.lexsort((cand, -moved[cand]))]  # the tie-break order of HeatMap.argmin
-    to_resolve = np.zeros(n, dtype=bool)
-    to_resolve[order[:n_full]] = True
-    resolved = np.zeros(n, dtype=bool)
-    pruned = np.zeros(n, dtype=bool)
-    values[cand] = floor[cand]
-    tie, spread = 0.0, None
-    shared = np.random.default_rng(seed)
-    if budget is not None and L:
-        from ..symmetry.scale import resolution
+        base = witness_search(D, n_samples=n, landmarks=L, seed=opts.seed, effort=opts.effort, budget=budget)
+    run = _HeatMapRun(D, n, L, base, opts, budget)
+    run.scan(progress)
+    c = run.settle()
+    if run.tie > 0:
+        run.break_ties(c)
+    # values are not clipped at sigma0: a value above it means the search with p fixed
+    # found a better witness than the base search did (then sigma0 was weak).
+    return HeatMap(run.values, run.sigma0, tuple(L), run.moved, run.resolved, run.pruned, run.results,
+                   time.perf_counter() - t0, run.tie, run.spread)
 
-        tie = math.sqrt(n) * resolution(D, n)
-        spread = D[:n, L].min(axis=1)
 
-    def take(p, r):
-        if r is not None and (float(r.sigma) > values[p] or p not in results):
-            values[p] = max(values[p], float(r.sigma))
-            results[p] = r
+class _HeatMapRun:
+    """One heat map being computed: the bound of each candidate so far (``values``, with the
+    search result attaining it in ``results``) and what was done to it (``resolved``,
+    ``pruned``, ``verified``).  The methods are the steps of the module docstring."""
 
-    def evaluate(p, stop):
+    def __init__(self, D, n, L, base, opts, budget):
+        self.D, self.n, self.L, self.base, self.opts, self.budget = D, n, L, base, opts, budget
+        self.sigma0 = float(base.sigma)
+        maps = _maps_of(base, opts.n_maps)
+        cand = self.cand = np.array([p for p in range(n) if p not in set(L)], dtype=np.int64)
+        if cand.size == 0:
+            raise InputError("every sample is already a landmark")
+        self.values = np.full(n, np.nan)
+        self.moved = np.zeros(n)
+        for t in maps:
+            self.moved = np.maximum(self.moved, D[np.arange(n), t])
+        self.floor = np.zeros(n)
+        self.floor[cand] = best_swap_avoiding(swap_table(D, n, budget), L, cand)  # step 3
+        self.results = {}
+        self.best_t = maps[0]
+        self.polish = WarmPolisher(D, n, maps, L, budget)
+        n_full = int(math.ceil(opts.resolve_fraction * cand.size))
+        self.order = cand[np.lexsort((cand, -self.moved[cand]))]  # the tie-break order of HeatMap.argmin
+        self.to_resolve = np.zeros(n, dtype=bool)
+        self.to_resolve[self.order[:n_full]] = True
+        self.resolved = np.zeros(n, dtype=bool)
+        self.pruned = np.zeros(n, dtype=bool)
+        self.verified = np.zeros(n, dtype=bool)
+        self.rounds = 0
+        self.values[cand] = self.floor[cand]
+        self.tie, self.spread = 0.0, None
+        self.shared = np.random.default_rng(opts.seed)
+        if budget is not None and L:
+            self.tie = math.sqrt(n) * resolution(D, n)
+            self.spread = D[:n, L].min(axis=1)
+
+    def take(self, p, r):
+        """Keep the search result ``r`` for candidate ``p`` if it raises its bound."""
+        if r is not None and (float(r.sigma) > self.values[p] or p not in self.results):
+            self.values[p] = max(self.values[p], float(r.sigma))
+            self.results[p] = r
+
+    def evaluate(self, p, stop):
         """Steps 1, 2 and 4 for candidate p; True when cut short above ``stop``."""
-        if best_t[p] == p:
-            values[p] = max(sigma0, floor[p])
-            results[p] = base
+        opts, L = self.opts, self.L
+        if self.best_t[p] == p:  # 1. fixed by the witness
+            self.values[p] = max(self.sigma0, self.floor[p])
+            self.results[p] = self.base
             return False
-        if stop < math.inf and floor[p] >= stop:
+        if stop < math.inf and self.floor[p] >= stop:
             return True  # its floor alone ties or beats the incumbent, which comes first
-        r, cut = polish.bounded(L + [p], p, stop=stop)
-        take(p, r)
-        if cut or not to_resolve[p]:
+        r, cut = self.polish.bounded(L + [p], p, stop=stop)  # 2. warm starts
+        self.take(p, r)
+        if cut or not self.to_resolve[p]:
             return cut
-        if resolve == "full":
-            r = search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort,
-                                      budget=budget)
+        if opts.resolve == "full":  # 4. re-solve
+            r = witness_search(self.D, n_samples=self.n, landmarks=L + [p], seed=opts.seed, effort=opts.effort,
+                               budget=self.budget)
         else:  # "ils": kicked copies of the repaired base maps, polished
             # pruned: candidates in order, kicks from one generator (as ever); unpruned: candidates in
             # parallel, so each draws its kicks from a generator of its own
-            r, cut = polish.bounded(L + [p], p, rng=shared if prune else np.random.default_rng([seed, p]),
-                                    n_kicks=n_kicks, stop=stop)
-        resolved[p] = True
-        take(p, r)
+            rng = self.shared if opts.prune else np.random.default_rng([opts.seed, p])
+            r, cut = self.polish.bounded(L + [p], p, rng=rng, n_kicks=opts.n_kicks, stop=stop)
+        self.resolved[p] = True
+        self.take(p, r)
         return cut
 
-    # candidates in tie-break order.  With ``prune`` one at a time (each search stops once it
-    # passes the smallest complete value so far, the incumbent: such a candidate cannot be the
-    # argmin), the searches of a candidate in parallel threads; without, CHUNK candidates at once
-    incumbent = math.inf
-    step = 1 if prune else CHUNK
-    for k0 in range(0, order.size, step):
-        chunk = [int(p) for p in order[k0:k0 + step]]
-        stop = incumbent if prune else math.inf
-        for p, cut in zip(chunk, thread_map(lambda p: evaluate(p, stop), chunk)):
-            pruned[p] = cut
-            if not cut:
-                incumbent = min(incumbent, values[p])
-        if progress:
-            progress(min(k0 + step, order.size), order.size)
-    # 5. verify the leaders: the current argmin is searched again from the best maps
-    # found for the other candidates (any of them, repaired to fix p, is feasible) and,
-    # for N <= FULL_VERIFY_N or resolve="full", by a fresh witness_search warm-started
-    # from its own best map; repeat until the argmin is a verified candidate.  A pruned
-    # candidate that becomes the argmin (after the leader's value rose) is first
-    # evaluated in full.
-    verified = np.zeros(n, dtype=bool)
-    donors = sorted((p for p in results if p not in L), key=lambda p: -values[p])[:n_cross]
-    donor_maps = [results[p].witness for p in donors]
-    rounds = 0
+    def scan(self, progress):
+        """Every candidate in tie-break order.  With ``prune`` one at a time (each search stops
+        once it passes the smallest complete value so far, the incumbent: such a candidate
+        cannot be the argmin), the searches of a candidate in parallel threads; without,
+        ``CHUNK`` candidates at once."""
+        order, prune = self.order, self.opts.prune
+        incumbent = math.inf
+        step = 1 if prune else CHUNK
+        for k0 in range(0, order.size, step):
+            chunk = [int(p) for p in order[k0:k0 + step]]
+            stop = incumbent if prune else math.inf
+            for p, cut in zip(chunk, thread_map(lambda p: self.evaluate(p, stop), chunk)):
+                self.pruned[p] = cut
+                if not cut:
+                    incumbent = min(incumbent, self.values[p])
+            if progress:
+                progress(min(k0 + step, order.size), order.size)
 
-    def verify(c):
-        nonlocal rounds
-        verified[c] = True
-        rounds += 1
-        if moved[c] == 0.0:
+    def verify(self, c):
+        """5. Search candidate ``c`` again from the donors' maps (repaired to fix it) and, for
+        N <= FULL_VERIFY_N or resolve="full", by a fresh witness_search warm-started from its
+        own best map."""
+        opts, L = self.opts, self.L
+        self.verified[c] = True
+        self.rounds += 1
+        if self.moved[c] == 0.0:
             return  # fixed by the witness: its value sigma0 is attained and maximal
-        starts = [repair_fixing(t, c) for t in donor_maps]
-        r = polish(L + [c], c, extra_starts=starts)
-        if resolve == "full" or n <= FULL_VERIFY_N:
-            own = [results[c].witness] if c in results else []
-            r2 = search.witness_search(D, n_samples=n, landmarks=L + [c], seed=seed, starts=own,
-                                       effort=effort, budget=budget)
+        starts = [repair_fixing(t, c) for t in self.donor_maps]
+        r = self.polish(L + [c], c, extra_starts=starts)
+        if opts.resolve == "full" or self.n <= FULL_VERIFY_N:
+            own = [self.results[c].witness] if c in self.results else []
+            r2 = witness_search(self.D, n_samples=self.n, landmarks=L + [c], seed=opts.seed, starts=own,
+                                effort=opts.effort, budget=self.budget)
             r = r2 if r is None or float(r2.sigma) > float(r.sigma) else r
-        if r is not None and float(r.sigma) > values[c]:
-            values[c] = float(r.sigma)
-            results[c] = r
+        if r is not None and float(r.sigma) > self.values[c]:
+            self.values[c] = float(r.sigma)
+            self.results[c] = r
 
-    while True:
-        c = HeatMap(values, sigma0, tuple(L), moved, resolved).argmin()
-        if pruned[c]:  # the returned argmin is never a pruned candidate
-            pruned[c] = evaluate(c, math.inf)
-            continue
-        if verified[c] or rounds >= max_verify or moved[c] == 0.0:
-            break
-        verify(c)
-    # 6'. near-ties of δ (module docstring): walk the candidates from the farthest from the
-    # landmarks; the first whose value, searched until it leaves the tie (and verified),
-    # stays within ``tie`` of the argmin's value m wins.  Values only grow, so m stays the
-    # smallest and ``HeatMap.argmin`` returns the same candidate.
-    if tie > 0:
-        window = values[c] + tie
-        for p in cand[np.lexsort((cand, -moved[cand], -spread[cand]))]:
+    def settle(self) -> int:
+        """5. Verify the leaders until the argmin is a verified candidate (at most
+        ``max_verify`` rounds); a pruned candidate that becomes the argmin (after the
+        leader's value rose) is first evaluated in full.  Returns the argmin."""
+        L = self.L
+        donors = sorted((p for p in self.results if p not in L), key=lambda p: -self.values[p])[:self.opts.n_cross]
+        self.donor_maps = [self.results[p].witness for p in donors]
+        while True:
+            c = HeatMap(self.values, self.sigma0, tuple(L), self.moved, self.resolved).argmin()
+            if self.pruned[c]:  # the returned argmin is never a pruned candidate
+                self.pruned[c] = self.evaluate(c, math.inf)
+                continue
+            if self.verified[c] or self.rounds >= self.opts.max_verify or self.moved[c] == 0.0:
+                return c
+            self.verify(c)
+
+    def break_ties(self, c):
+        """6'. Near-ties of δ (module docstring): walk the candidates from the farthest from the
+        landmarks; the first whose value, searched until it leaves the tie (and verified),
+        stays within ``tie`` of the argmin's value m wins.  Values only grow, so m stays the
+        smallest and ``HeatMap.argmin`` returns the same candidate."""
+        values, pruned, cand = self.values, self.pruned, self.cand
+        window = values[c] + self.tie
+        for p in cand[np.lexsort((cand, -self.moved[cand], -self.spread[cand]))]:
             p = int(p)
             if p == c:
                 break
             if values[p] > window:
                 continue  # already a lower bound above the tie
             if pruned[p]:
-                pruned[p] = evaluate(p, window)  # only a pruned search is resumed
-            if not pruned[p] and values[p] <= window and not verified[p] and rounds < max_verify:
-                verify(p)
+                pruned[p] = self.evaluate(p, window)  # only a pruned search is resumed
+            if not pruned[p] and values[p] <= window and not self.verified[p] and \
+                    self.rounds < self.opts.max_verify:
+                self.verify(p)
             if not pruned[p] and values[p] <= window:
                 break
-    # values are not clipped at sigma0: a value above it means the search with p fixed
-    # found a better witness than the base search did (then sigma0 was weak).
-    return HeatMap(values, sigma0, tuple(L), moved, resolved, pruned, results, time.perf_counter() - t0,
-                   tie, spread)
 
 
 @single_blas_thread
 def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = "default", budget=None):
     """Reference heat map: a full multistart search for every candidate (slow; tests, benchmarks)."""
-    search = _search_module()
     D = np.asarray(D, dtype=float)
     n = D.shape[0] if n_samples is None else int(n_samples)
     L = [int(v) for v in landmarks]
     values = np.full(n, np.nan)
     for p in range(n):
         if p not in L:
-            values[p] = float(search.witness_search(D, n_samples=n, landmarks=L + [p], seed=seed,
-                                                    effort=effort, budget=budget).sigma)
+            values[p] = float(witness_search(D, n_samples=n, landmarks=L + [p], seed=seed, effort=effort,
+                                             budget=budget).sigma)
     return values
 
 
@@ -416,16 +471,35 @@ def _swap_witness(D, n, L, base, budget=None):
     return WarmPolisher(D, n, _maps_of(base, N_MAPS), L[:-1], budget)(L, L[-1], extra_starts=[t])
 
 
+def _next_base(D, n, L, c, hm, prev, budget, opts):
+    """The witness search result with the new landmark ``c`` fixed that the next heat map starts
+    from: the heat map ``hm``'s result for ``c``, or a map attaining the single-swap floor when
+    that won (warm-started from ``prev``, the base of ``hm``, if ``c`` has no result); for δ, a
+    fresh search warm-started from its maps if it finds more (module docstring)."""
+    base = hm.results.get(c)
+    if base is None or float(base.sigma) < hm.values[c]:
+        # the single-swap floor won: continue from a witness that attains it
+        base = _swap_witness(D, n, L + [c], base or prev, budget)
+    if budget is not None:
+        # δ: a fresh search with the new landmark, warm-started from the heat map's maps
+        # (module docstring, on ties): the next heat map starts from it
+        fresh = witness_search(D, n_samples=n, landmarks=L + [c], seed=opts.seed, effort=opts.effort,
+                               starts=_maps_of(base, opts.n_maps), budget=budget)
+        base = fresh if float(fresh.sigma) > float(base.sigma) else base
+    return base
+
+
 @single_blas_thread
-def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = "default",
-                   n_maps: int = N_MAPS, resolve_fraction: float = RESOLVE_FRACTION,
-                   resolve: str = "ils", prune: bool = True, progress=None, keep_heat_maps: bool = False,
-                   budget=None, base=None):
+@with_options(CNBSOptions)
+def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=None, options=None, **kw):
     """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
 
     ``budget``: None for the paper's σ; a Dist² budget for the scale-aware score
     (``heat_map``), the ``cnbs-scale`` method.  ``base``: the ``witness_search``
     result with ``fixed`` fixed (and the same ``budget``), when already known.
+    ``progress``: callable(step, done, total) or None.  ``options``: CNBSOptions (the
+    ``HeatMapOptions`` of every step, pruned by default, and ``keep_heat_maps``); each of
+    its fields may also be given as a keyword argument.
 
     Returns
     -------
@@ -433,34 +507,23 @@ def cnbs_landmarks(D, n_samples, k: int, fixed=(), seed: int = 0, effort: str = 
     after each), ``initial_score`` (σ with only ``fixed``), ``heat_maps`` (list of
     HeatMap when ``keep_heat_maps``), ``witness`` (final witness map).
     """
-    search = _search_module()
+    opts = merge_options(CNBSOptions, options, kw, "cnbs_landmarks")
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
     n = D.shape[0] if n_samples is None else int(n_samples)
     L = check_landmark_count(k, n, fixed)
     if base is None:
-        base = search.witness_search(D, n_samples=n, landmarks=L, seed=seed, effort=effort, budget=budget)
+        base = witness_search(D, n_samples=n, landmarks=L, seed=opts.seed, effort=opts.effort, budget=budget)
     initial = float(base.sigma)
     new, scores, maps = [], [], []
     for step in range(k):
-        hm = heat_map(D, n, L, base=base, seed=seed, effort=effort, n_maps=n_maps,
-                      resolve_fraction=resolve_fraction, resolve=resolve, prune=prune,
-                      progress=(lambda d, t, s=step: progress(s, d, t)) if progress else None,
-                      budget=budget)
+        hm = heat_map(D, n, L, base=base, budget=budget, options=opts,
+                      progress=(lambda d, t, s=step: progress(s, d, t)) if progress else None)
         c = hm.argmin()
         new.append(c)
         scores.append(float(hm.values[c]))
-        prev, base = base, hm.results.get(c)
-        if base is None or float(base.sigma) < hm.values[c]:
-            # the single-swap floor won: continue from a witness that attains it
-            base = _swap_witness(D, n, L + [c], base or prev, budget)
-        if budget is not None:
-            # δ: a fresh search with the new landmark, warm-started from the heat map's maps
-            # (module docstring, on ties): the next heat map starts from it
-            fresh = search.witness_search(D, n_samples=n, landmarks=L + [c], seed=seed, effort=effort,
-                                          starts=_maps_of(base, n_maps), budget=budget)
-            base = fresh if float(fresh.sigma) > float(base.sigma) else base
+        base = _next_base(D, n, L, c, hm, base, budget, opts)
         L.append(c)
-        if keep_heat_maps:
+        if opts.keep_heat_maps:
             maps.append(hm)
         else:
             hm.results.clear()

@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import InputError
+from ..shapes.laplace import DEFAULT_EIGENPAIRS, laplace_basis
 from .fps import fps_landmarks
 from .result import sample_of_vertex
 
@@ -42,8 +43,6 @@ def heat_kernel_signature(evals: np.ndarray, evecs: np.ndarray, t: float) -> np.
 
 
 def _mesh_spectrum(geometry, n_eigs):
-    from ..shapes.laplace import DEFAULT_EIGENPAIRS, laplace_basis
-
     basis = laplace_basis(geometry, max(n_eigs, DEFAULT_EIGENPAIRS))
     return basis.evals[:n_eigs], basis.evecs[:, :n_eigs]
 

@@ -13,6 +13,10 @@ import math
 
 import numpy as np
 
+from ..symmetry import _kernels as K
+from ..symmetry import objective as obj
+from ..symmetry.search import DENSE_K, KEEP, MapPool, SearchResult, SearchStage, kick_limit
+from ..symmetry.starts import repair
 from ..threads import n_threads, thread_map
 
 
@@ -27,12 +31,6 @@ def _used(t, m):
     used = np.zeros(m, dtype=bool)
     used[t] = True
     return used
-
-
-def _search_module():
-    from ..symmetry import search
-
-    return search
 
 
 class WarmPolisher:
@@ -50,52 +48,37 @@ class WarmPolisher:
     """
 
     def __init__(self, D, n, maps, landmarks=(), budget=None):
-        from ..symmetry import _kernels as K
-        from ..symmetry import objective as obj
-
         # the objective: σ² (ratio), or d² within a Dist² budget (the scale-aware score)
         self.budget = budget
         self.mode, self.s = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
-
-        self.K, self.obj, self.search = K, obj, _search_module()
         self.D = np.ascontiguousarray(np.asarray(D, dtype=np.float64))
         self.n = n = int(n)
         m = self.D.shape[0]
         allfree = np.arange(n, dtype=np.int64)
-        if m > n:
-            stage = self.search.SearchStage(self.D, n, allfree, self.search.DENSE_K)
-        else:
-            stage = self.search.SearchStage(self.D, n, allfree, 0)
-        self.knn, self.floor = stage.knn, stage.floor
+        self.stage = SearchStage(self.D, n, allfree, DENSE_K if m > n else 0)
+        self.knn, self.floor = self.stage.knn, self.stage.floor
         # polish every base map once in the full space (maps from the bijection stage
         # of the search may not be local optima over dense targets yet), so that the
         # per-candidate searches start one move away from a local optimum
         lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
-        free = np.setdiff1d(allfree, lm)
+        space, goal = self.stage.space(np.setdiff1d(allfree, lm)), self.stage.goal(self.mode, self.s, lm)
         self.base, seen = [], set()
         for t in maps:
-            t = self.search.S.repair(np.asarray(t, dtype=np.int64), n, m, lm)
-            G = self.D[:n, :n] @ self.D[t, :]
-            H = np.sum(self.D[t, :] ** 2, axis=0)
-            used = np.zeros(m, dtype=bool)
-            used[t] = True
-            d2v, dist2v, _ = K.local_search(self.D, n, t, G, H, free, self.knn, used, self.mode, self.s,
-                                            obj.d2(self.D, t), obj.dist2(self.D, t), self.floor, 50 * n,
-                                            np.inf, lm, obj.anchor_rows(self.D, t, lm), self.s / n)
+            t = repair(np.asarray(t, dtype=np.int64), n, m, lm)
+            state = self.stage.start(t, lm)
+            d2v, dist2v, _ = K.local_search(space, goal, state)
             key = t.tobytes()
             if key not in seen:
                 seen.add(key)
                 # the search leaves G at its starting map: the repairs need the product of t
-                G = obj.cross_product(self.D, t)
-                self.base.append((t, G, H, d2v, dist2v))
+                self.base.append((t, obj.cross_product(self.D, t), state.H, d2v, dist2v))
 
     def _repaired(self, b, p):
         """Copy of base state ``b`` with one move making T(p) = p (G, H kept exact)."""
-        K, obj, D, n = self.K, self.obj, self.D, self.n
+        D, n = self.D, self.n
         t0, G0, H0, d2v, dist2v = self.base[b]
         t, G, H = t0.copy(), G0.copy(), H0.copy()
-        used = np.zeros(D.shape[0], dtype=bool)
-        used[t] = True
+        used = _used(t, D.shape[0])
         if t[p] != p:
             pre = np.flatnonzero(t == p)
             if pre.size:
@@ -126,99 +109,25 @@ class WarmPolisher:
         Used by the pruned CNBS heat map (``cnbs.heat_map(prune=True)``), where a
         candidate above the incumbent minimum cannot be the argmin.
         """
-        K, obj, D, n = self.K, self.obj, self.D, self.n
-        m = D.shape[0]
-        stop2 = stop * stop  # the search compares σ² (inf stays inf)
-        lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
-        free = np.setdiff1d(np.arange(n, dtype=np.int64), lm)
-        found = {}  # map bytes -> (tracked ratio d²/Dist², map)
-
-        lb = self.s / n
-
-        def keep(t, d2v, dist2v, rows):
-            if self.budget is not None:
-                exc = max(dist2v - self.budget, 0.0) + float(np.sum(np.maximum(rows - lb, 0.0)))
-                r = d2v if exc == 0.0 else -exc
-            else:
-                r = 0.0 if d2v <= 0.0 else (math.inf if dist2v <= self.floor else d2v / dist2v)
-            found.setdefault(t.tobytes(), (r, t))
-            return r > stop2
-
-        def search(start):
-            """The local search from one prepared start: (t, d², Dist², anchor rows)."""
-            t, G, H, used, d2v, dist2v = start
-            rows = obj.anchor_rows(D, t, lm)
-            d2v, dist2v, _ = K.local_search(D, n, t, G, H, free, self.knn, used, self.mode, self.s, d2v,
-                                            dist2v, self.floor, 50 * n, stop2, lm, rows, lb)
-            return t, d2v, dist2v, rows
-
+        run = _CandidateRun(self, landmarks, p, stop, rng)
         jobs = [(b, 0) for b in range(len(self.base))]
         if rng is not None and self.base:
             # kicks as large as the witness search's (``search.kick_limit``): up to N/8 (50 at N = 400)
             # cost 3.3x the time of a heat map on TOSCA cat0 for the same argmin, and of 15 CNBS
             # landmarks 2.4x for the same landmarks on wolf0 and centaur0 (cat0: the last three
             # differ, σ after 15 re-scored 0.317 against 0.316)
-            hi = self.search.kick_limit(free.size)
+            hi = kick_limit(run.free.size)
             jobs += [(k % len(self.base), int(rng.integers(2, hi + 1))) for k in range(n_kicks)]
-
-        def starts():
-            """The starts in order: ("keep", state) for a base map still a local optimum with p
-            fixed, ("search", state) for the others (repaired, kicked, or ``extra_starts``)."""
-            for b, size in jobs:
-                t0, G0, H0, d20, dist20 = self.base[b]
-                if size == 0 and t0[p] == p and np.all(t0[lm] == lm):
-                    # still a local optimum with p fixed (for σ; with a budget, p's row may now break it)
-                    if self.budget is None:
-                        yield "keep", (t0, d20, dist20, None)
-                    else:  # G is only read by the search
-                        yield "search", (t0.copy(), G0, H0.copy(), _used(t0, m), d20, dist20)
-                    continue
-                t, G, H, used, d2v, dist2v = self._repaired(b, p)
-                if np.any(t[lm] != lm):
-                    continue  # a base map that moves a landmark (cannot happen for true warm maps)
-                if self.budget is not None and obj.anchor_rows(D, t, [p])[0] > HOPELESS * lb:
-                    continue  # p kills this map (see HOPELESS)
-                for _ in range(size - 1):
-                    a, c = rng.choice(free, size=2, replace=False)
-                    dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
-                    K.apply_swap(D, n, t, G, int(a), int(c))
-                    d2v, dist2v = d2v + dd, dist2v + dD
-                yield "search", (t, G, H, used, d2v, dist2v)
-            for t in extra_starts:
-                t = self.search.S.repair(t, n, m, lm)
-                G = D[:n, :n] @ D[t, :]
-                H = np.sum(D[t, :] ** 2, axis=0)
-                yield "search", (t, G, H, _used(t, m), obj.d2(D, t), obj.dist2(D, t))
-
-        # the searches of a few starts at once in parallel threads (``shapecond.threads``), their
-        # results taken in order up to the first above ``stop``: what a serial loop would keep.
-        # The kicks of the starts prepared beyond that one are undone in ``rng`` too (its state
-        # before each start is kept), so that it moves on exactly as in a serial loop.
-        it, k = starts(), n_threads()
-        while True:
-            chunk, states = [], []
-            for _ in range(k):
-                states.append(None if rng is None else rng.bit_generator.state)
-                st = next(it, None)
-                if st is None:
-                    break
-                chunk.append(st)
-            if not chunk:
-                return self._result(found, lm), False
-            done = iter(thread_map(search, [st for kind, st in chunk if kind == "search"]))
-            for i, (kind, st) in enumerate(chunk):
-                if keep(*(st if kind == "keep" else next(done))):
-                    if rng is not None and i + 1 < len(chunk):
-                        rng.bit_generator.state = states[i + 1]
-                    return self._result(found, lm), True
+        pruned = run.run(run.starts(jobs, extra_starts))
+        return self._result(run.found, run.lm), pruned
 
     def _result(self, found, anchors=()):
         """SearchResult of the best maps found, the best two re-scored exactly."""
         # rank by the tracked values (rank-1 updates, exact up to round-off); the best
         # two are re-scored exactly, so the reported σ is the exact σ of its witness
         n = self.n
-        ranked = [it for it in sorted(found.values(), key=lambda it: -it[0]) if it[0] > 0][: self.search.KEEP]
-        pool = self.search.MapPool(self.D, n, self.budget, anchors)
+        ranked = [it for it in sorted(found.values(), key=lambda it: -it[0]) if it[0] > 0][:KEEP]
+        pool = MapPool(self.D, n, self.budget, anchors)
         for _, t in ranked[:2]:
             pool.add(t)
         exact = pool.top(2)
@@ -229,5 +138,92 @@ class WarmPolisher:
         sig = [math.inf if v == math.inf else math.sqrt(v)]
         sig += [math.inf if r == math.inf else math.sqrt(max(r, 0.0)) for r, u in ranked
                 if u.tobytes() != t.tobytes()]
-        return self.search.SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den,
-                                        maps=tuple(maps), sigmas=tuple(sig), seconds=0.0)
+        return SearchResult(sigma=sig[0], witness=t, d2=num, dist2=den, maps=tuple(maps), sigmas=tuple(sig),
+                            seconds=0.0)
+
+
+class _CandidateRun:
+    """The searches of ``WarmPolisher.bounded`` for one candidate ``p``: the maps they found
+    (``found``: map bytes -> (tracked value, map)), in the order a serial loop takes them."""
+
+    def __init__(self, polisher, landmarks, p, stop, rng):
+        self.w, self.p, self.rng = polisher, p, rng
+        self.lm = np.array(sorted(int(v) for v in landmarks), dtype=np.int64)
+        self.free = np.setdiff1d(np.arange(polisher.n, dtype=np.int64), self.lm)
+        self.stop2 = stop * stop  # the search compares σ² (inf stays inf)
+        self.space = polisher.stage.space(self.free)
+        self.goal = polisher.stage.goal(polisher.mode, polisher.s, self.lm, stop=self.stop2)
+        self.found = {}
+
+    def keep(self, t, d2v, dist2v, rows) -> bool:
+        """Record the map ``t`` with its tracked value; True when that value is above ``stop``."""
+        w = self.w
+        if w.budget is not None:
+            lb = self.goal.anchor_budget
+            exc = max(dist2v - w.budget, 0.0) + float(np.sum(np.maximum(rows - lb, 0.0)))
+            r = d2v if exc == 0.0 else -exc
+        else:
+            r = 0.0 if d2v <= 0.0 else (math.inf if dist2v <= w.floor else d2v / dist2v)
+        self.found.setdefault(t.tobytes(), (r, t))
+        return r > self.stop2
+
+    def search(self, start):
+        """The local search from one prepared start: (t, d², Dist², anchor rows)."""
+        t, G, H, used, d2v, dist2v = start
+        rows = obj.anchor_rows(self.w.D, t, self.lm)
+        d2v, dist2v, _ = K.local_search(self.space, self.goal, K.MapState(t, G, H, used, rows, d2v, dist2v))
+        return t, d2v, dist2v, rows
+
+    def starts(self, jobs, extra_starts):
+        """The starts in order: ("keep", state) for a base map still a local optimum with p
+        fixed, ("search", state) for the others (repaired, kicked, or ``extra_starts``)."""
+        w, p, lm, rng = self.w, self.p, self.lm, self.rng
+        D, n, m = w.D, w.n, w.D.shape[0]
+        for b, size in jobs:
+            t0, G0, H0, d20, dist20 = w.base[b]
+            if size == 0 and t0[p] == p and np.all(t0[lm] == lm):
+                # still a local optimum with p fixed (for σ; with a budget, p's row may now break it)
+                if w.budget is None:
+                    yield "keep", (t0, d20, dist20, None)
+                else:  # G is only read by the search
+                    yield "search", (t0.copy(), G0, H0.copy(), _used(t0, m), d20, dist20)
+                continue
+            t, G, H, used, d2v, dist2v = w._repaired(b, p)
+            if np.any(t[lm] != lm):
+                continue  # a base map that moves a landmark (cannot happen for true warm maps)
+            if w.budget is not None and obj.anchor_rows(D, t, [p])[0] > HOPELESS * self.goal.anchor_budget:
+                continue  # p kills this map (see HOPELESS)
+            for _ in range(size - 1):
+                a, c = rng.choice(self.free, size=2, replace=False)
+                dd, dD = obj.swap_delta(D, t, G, int(a), int(c))
+                K.apply_swap(D, n, t, G, int(a), int(c))
+                d2v, dist2v = d2v + dd, dist2v + dD
+            yield "search", (t, G, H, used, d2v, dist2v)
+        for t in extra_starts:
+            t = repair(t, n, m, lm)
+            yield "search", (t, D[:n, :n] @ D[t, :], np.sum(D[t, :] ** 2, axis=0), _used(t, m), obj.d2(D, t),
+                             obj.dist2(D, t))
+
+    def run(self, starts) -> bool:
+        """Search from ``starts``, a few at once in parallel threads (``shapecond.threads``), their
+        results taken in order up to the first above ``stop``: what a serial loop would keep.
+        The kicks of the starts prepared beyond that one are undone in ``rng`` too (its state
+        before each start is kept), so that it moves on exactly as in a serial loop.  True when
+        stopped above ``stop``."""
+        rng, k = self.rng, n_threads()
+        while True:
+            chunk, states = [], []
+            for _ in range(k):
+                states.append(None if rng is None else rng.bit_generator.state)
+                st = next(starts, None)
+                if st is None:
+                    break
+                chunk.append(st)
+            if not chunk:
+                return False
+            done = iter(thread_map(self.search, [st for kind, st in chunk if kind == "search"]))
+            for i, (kind, st) in enumerate(chunk):
+                if self.keep(*(st if kind == "keep" else next(done))):
+                    if rng is not None and i + 1 < len(chunk):
+                        rng.bit_generator.state = states[i + 1]
+                    return True

@@ -44,10 +44,12 @@ is discarded before it is visited when ``const + P[u, y]`` plus the assignment
 maximum of ``P`` without row ``u`` and column ``y`` is ``<= tol``: the same
 bound restricted to the completions with ``T u = y``.
 
-Implementation: the depth-first search runs in one numba function (``_dfs``)
-with explicit per-depth state (children in best-profit order, the cross term
+Implementation: the depth-first search runs in numba (``_dfs``) with explicit
+per-depth state (``_Stack``: children in best-profit order, the cross term
 ``C1`` updated incrementally by ``(D[x,u] − D[y,Tu])²`` when ``u -> Tu`` is
-fixed); it checks the clock every 256 nodes.
+fixed); a node is evaluated by ``_visit`` (bound, primal candidate) and
+``_branch`` (children), a child entered by ``_descend``.  It checks the clock
+every 256 nodes (every node when nodes are large).
 
 Floating point: a node is pruned when its bound is ``<= tol`` with
 ``tol = 1e-12 · N``; a pruned map can beat the result only by a relative
@@ -58,6 +60,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, objmode
@@ -128,8 +131,7 @@ def _move_ratios(D, n, free, t, d2c, dist2c):
 
 
 def _safe_ratio(D, n, num, den, mask):
-    scale2 = float(np.sum(D[:n, :n] ** 2))
-    iso = den <= (objective.ISOMETRY_RTOL**2) * scale2
+    iso = den <= objective.isometry_floor(D, n)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(iso, np.inf, num / np.where(iso, 1.0, den))
     r = np.where(num <= 0.0, 0.0, r)
@@ -185,12 +187,55 @@ def branch_and_bound(D, n, landmarks, r0, t0, deadline):
     free = np.setdiff1d(np.arange(n), L).astype(np.int64)
     targets = np.setdiff1d(np.arange(M), L).astype(np.int64)
     t_init = np.arange(n, dtype=np.int64) if t0 is None else np.asarray(t0, dtype=np.int64).copy()
-    iso2 = (objective.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2))
+    iso2 = objective.isometry_floor(D, n)
     budget = math.inf if deadline is None else deadline - time.perf_counter()
-    r, t, finished, nodes = _dfs(D, n, L, free, targets, float(r0), t_init, iso2, 1e-12 * n, float(budget))
+    r, t, finished, nodes = _dfs(_Tree(D, n, L, free, targets, iso2, 1e-12 * n), float(r0), t_init, float(budget))
     if t0 is None and r == 0.0:
         return 0.0, None, bool(finished), int(nodes)
     return float(r), t, bool(finished), int(nodes)
+
+
+class _Tree(NamedTuple):
+    """The instance the tree search solves (``branch_and_bound``)."""
+
+    D: np.ndarray  # (M, M) distances, samples first
+    n: int  # N
+    L: np.ndarray  # landmarks
+    free: np.ndarray  # free samples
+    targets: np.ndarray  # targets that are not landmarks
+    iso2: float  # objective.isometry_floor
+    tol: float  # a bound <= tol prunes (module docstring, "Floating point")
+
+
+class _Stack(NamedTuple):
+    """The depth-first search's state per depth (index ``depth``: the node at that depth)."""
+
+    t: np.ndarray  # the partial map (-1: unassigned)
+    used: np.ndarray  # targets taken
+    C1: np.ndarray  # (free + 1, N, M) cross terms of the assigned samples
+    d2A: np.ndarray  # d² of the assigned samples
+    dist2A: np.ndarray  # Dist² among the assigned samples
+    u_at: np.ndarray  # the sample branched on
+    kids: np.ndarray  # its images to visit, best profit first
+    nkids: np.ndarray
+    pos: np.ndarray  # the next child to visit
+
+
+class _Work(NamedTuple):
+    """Scratch arrays of one node."""
+
+    U: np.ndarray  # unassigned samples
+    R: np.ndarray  # unused targets
+    As: np.ndarray  # sorted rows of D over U
+    Bs: np.ndarray  # sorted rows of D over R
+    P: np.ndarray  # profit W − s (2 C1 + GL) over U × R
+    Pr: np.ndarray  # P without a row and a column (a forced child's bound)
+    col: np.ndarray  # the assignment of the linear assignment problem
+    cand: np.ndarray  # the node's LAP completion
+    alive: np.ndarray  # children not pruned by the row-max estimate
+    rowmax: np.ndarray
+    order: np.ndarray
+    spread: np.ndarray  # std of each row of D, normalised: ties go to distinctive rows
 
 
 @njit(cache=True)
@@ -198,6 +243,12 @@ def _clock():
     with objmode(now="float64"):
         now = time.perf_counter()
     return now
+
+
+@njit(cache=True)
+def _late(clock):
+    """``clock = (start, budget)``: True once ``budget`` seconds have passed since ``start``."""
+    return _clock() - clock[0] > clock[1]
 
 
 @njit(cache=True)
@@ -274,8 +325,10 @@ def _map_ratio(D, n, t, iso2):
 
 
 @njit(cache=True)
-def _profit(D, n, U, k, R, m, C1, s, As, Bs, P):
-    """P = W − s (2 C1 + GL) over U×R (module docstring); fills As, Bs, P."""
+def _profit(D, U, R, C1, s, As, Bs, P):
+    """P = W − s (2 C1 + GL) over U×R (module docstring); ``As`` and ``Bs`` receive the sorted rows
+    of D over U and over R."""
+    k, m = U.size, R.size
     for a in range(k):
         for b in range(k):
             As[a, b] = D[U[a], U[b]]
@@ -299,21 +352,20 @@ def _profit(D, n, U, k, R, m, C1, s, As, Bs, P):
 
 
 @njit(cache=True)
-def _dfs(D, n, L, free, targets, best_r, best_t, iso2, tol, budget):
+def _root(tree):
+    """The stack and the scratch arrays, with the landmarks assigned at the root."""
+    D, n, L = tree.D, tree.n, tree.L
     M = D.shape[0]
-    nf = free.size
-    start = _clock()
-    # read the clock every node when a node is large (N = 400: ~0.4 s each), every 256 when tiny
-    stride = max(1, min(256, (1 << 20) // max(1, nf * nf * M)))
+    nf = tree.free.size
     spread = np.zeros(n)
     for x in range(n):
         spread[x] = np.std(D[x, :])
     spread /= spread.max() + 1e-300
     t = -np.ones(n, dtype=np.int64)
-    used_t = np.zeros(M, dtype=np.bool_)
+    used = np.zeros(M, dtype=np.bool_)
     for l in L:
         t[l] = l
-        used_t[l] = True
+        used[l] = True
     C1 = np.zeros((nf + 1, n, M))
     for x in range(n):
         for y in range(M):
@@ -322,132 +374,174 @@ def _dfs(D, n, L, free, targets, best_r, best_t, iso2, tol, budget):
                 dd = D[x, l] - D[y, l]
                 c += dd * dd
             C1[0, x, y] = c
-    d2A = np.zeros(nf + 1)
-    dist2A = np.zeros(nf + 1)
-    u_at = np.zeros(nf + 1, dtype=np.int64)
-    kids = np.zeros((nf + 1, M), dtype=np.int64)
-    nkids = np.zeros(nf + 1, dtype=np.int64)
-    pos = np.zeros(nf + 1, dtype=np.int64)
-    U = np.empty(nf, dtype=np.int64)
-    R = np.empty(M, dtype=np.int64)
-    As = np.empty((nf, nf))
-    Bs = np.empty((M, M))
-    P = np.empty((nf, M))
-    Pr = np.empty((nf, M))
-    col = np.empty(M, dtype=np.int64)
-    cand = np.empty(n, dtype=np.int64)
-    alive = np.empty((nf, M), dtype=np.bool_)
-    rowmax = np.empty(nf)
-    order = np.empty(M, dtype=np.int64)
+    stack = _Stack(t, used, C1, np.zeros(nf + 1), np.zeros(nf + 1), np.zeros(nf + 1, dtype=np.int64),
+                   np.zeros((nf + 1, M), dtype=np.int64), np.zeros(nf + 1, dtype=np.int64),
+                   np.zeros(nf + 1, dtype=np.int64))
+    work = _Work(np.empty(nf, dtype=np.int64), np.empty(M, dtype=np.int64), np.empty((nf, nf)), np.empty((M, M)),
+                 np.empty((nf, M)), np.empty((nf, M)), np.empty(M, dtype=np.int64), np.empty(n, dtype=np.int64),
+                 np.empty((nf, M), dtype=np.bool_), np.empty(nf), np.empty(M, dtype=np.int64), spread)
+    return stack, work
+
+
+@njit(cache=True, inline="always")
+def _open_parts(tree, stack, work):
+    """Gather the node's unassigned samples into ``work.U`` and unused targets into ``work.R``;
+    returns their counts (k, m)."""
+    t, used = stack.t, stack.used
+    k = 0
+    for x in tree.free:
+        if t[x] < 0:
+            work.U[k] = x
+            k += 1
+    m = 0
+    for y in tree.targets:
+        if not used[y]:
+            work.R[m] = y
+            m += 1
+    return k, m
+
+
+@njit(cache=True, inline="always")
+def _branch(tree, stack, work, depth, k, m, const, clock):
+    """Choose the sample to branch on and list its children (module docstring): first fail on the
+    row-max estimate, ties to distinctive rows; a child ``T u = y`` is kept when the bound with
+    it forced stays above ``tol``.  False when the clock ran out (large nodes only)."""
+    P, Pr, alive, rowmax, U = work.P, work.Pr, work.alive, work.rowmax, work.U
+    total = 0.0
+    for a in range(k):
+        rowmax[a] = P[a, :m].max()
+        total += rowmax[a]
+    best_i, best_c = 0, np.inf
+    for a in range(k):
+        cnt = 0
+        for b in range(m):
+            alive[a, b] = const + total - rowmax[a] + P[a, b] > tree.tol
+            cnt += alive[a, b]
+        c = cnt - 0.5 * work.spread[U[a]]
+        if c < best_c:
+            best_c, best_i = c, a
+    stack.u_at[depth] = U[best_i]
+    work.order[:m] = np.argsort(-P[best_i, :m])
+    for q in range(m):
+        b = work.order[q]
+        if not alive[best_i, b]:
+            continue
+        if clock[2] == 1 and _late(clock):  # large nodes: one LAP per child
+            return False
+        if k > 2:  # the same bound with T u = y forced
+            ra = 0
+            for a in range(k):
+                if a == best_i:
+                    continue
+                cb = 0
+                for bb in range(m):
+                    if bb != b:
+                        Pr[ra, cb] = P[a, bb]
+                        cb += 1
+                ra += 1
+            if const + P[best_i, b] + _lap_max(Pr, k - 1, m - 1, work.col) <= tree.tol:
+                continue
+        stack.kids[depth, stack.nkids[depth]] = work.R[b]
+        stack.nkids[depth] += 1
+    return True
+
+
+@njit(cache=True, inline="always")
+def _visit(tree, stack, work, depth, best_r, best_t, clock):
+    """Evaluate the node at ``depth``: a leaf's ratio, or the LAP bound with its completion as a
+    primal candidate, and the children when the bound is above ``tol``.
+
+    Returns ``(status, best_r, best_t)``: status 0 go on, 1 out of time, 2 an isometry found.
+    """
+    D, n, iso2 = tree.D, tree.n, tree.iso2
+    k, m = _open_parts(tree, stack, work)
+    if k == 0:
+        r = _map_ratio(D, n, stack.t, iso2)
+        if r > best_r * (1.0 + 1e-12):
+            best_r, best_t = r, stack.t.copy()
+            if r == np.inf:
+                return 2, best_r, best_t
+        return 0, best_r, best_t
+    U, R, C1 = work.U[:k], work.R[:m], stack.C1[depth]
+    s = best_r
+    _profit(D, U, R, C1, s, work.As, work.Bs, work.P)
+    lap = _lap_max(work.P, k, m, work.col)
+    if clock[2] == 1 and _late(clock):  # a large node's bound takes seconds
+        return 1, best_r, best_t
+    cand = work.cand
+    cand[:] = stack.t
+    for a in range(k):
+        cand[U[a]] = R[work.col[a]]
+    r = _map_ratio(D, n, cand, iso2)
+    if r > best_r * (1.0 + 1e-12):  # primal candidate: the LAP completion
+        best_r, best_t = r, cand.copy()
+        if r == np.inf:
+            return 2, best_r, best_t
+        s = best_r
+        _profit(D, U, R, C1, s, work.As, work.Bs, work.P)
+        lap = _lap_max(work.P, k, m, work.col)
+    const = stack.d2A[depth] - s * stack.dist2A[depth]
+    if const + lap > tree.tol and not _branch(tree, stack, work, depth, k, m, const, clock):
+        return 1, best_r, best_t
+    return 0, best_r, best_t
+
+
+@njit(cache=True, inline="always")
+def _descend(tree, stack, depth):
+    """Assign the node's next child ``T u = y`` (undoing the previous sibling) and fill the
+    state of depth + 1: d², Dist² and the cross terms C1 updated by ``(D[x,u] − D[z,y])²``."""
+    D, n = tree.D, tree.n
+    M = D.shape[0]
+    t, used, C1 = stack.t, stack.used, stack.C1
+    u = stack.u_at[depth]
+    y = stack.kids[depth, stack.pos[depth]]
+    stack.pos[depth] += 1
+    if t[u] >= 0:  # undo the previous sibling
+        used[t[u]] = False
+    stack.d2A[depth + 1] = stack.d2A[depth] + D[u, y] ** 2
+    stack.dist2A[depth + 1] = stack.dist2A[depth] + 2.0 * C1[depth, u, y]
+    for x in range(n):
+        for z in range(M):
+            dd = D[x, u] - D[z, y]
+            C1[depth + 1, x, z] = C1[depth, x, z] + dd * dd
+    t[u] = y
+    used[y] = True
+
+
+@njit(cache=True)
+def _dfs(tree, best_r, best_t, budget):
+    """The depth-first search of ``branch_and_bound``: (ratio², map, finished, nodes)."""
+    nf = tree.free.size
+    start = _clock()
+    # read the clock every node when a node is large (N = 400: ~0.4 s each), every 256 when tiny
+    stride = max(1, min(256, (1 << 20) // max(1, nf * nf * tree.D.shape[0])))
+    clock = (start, budget, stride)
+    stack, work = _root(tree)
     nodes = 0
     depth = 0
     enter = True
     while True:
         if enter:
-            # ---- evaluate the node just entered ----
             enter = False
             nodes += 1
-            nkids[depth] = 0
-            pos[depth] = 0
-            if nodes % stride == 1 % stride and _clock() - start > budget:
+            stack.nkids[depth] = 0
+            stack.pos[depth] = 0
+            if nodes % stride == 1 % stride and _late(clock):
                 return best_r, best_t, False, nodes
-            k = 0
-            for x in free:
-                if t[x] < 0:
-                    U[k] = x
-                    k += 1
-            m = 0
-            for y in targets:
-                if not used_t[y]:
-                    R[m] = y
-                    m += 1
-            if k == 0:
-                r = _map_ratio(D, n, t, iso2)
-                if r > best_r * (1.0 + 1e-12):
-                    best_r = r
-                    best_t = t.copy()
-                    if r == np.inf:
-                        return best_r, best_t, True, nodes
-            else:
-                s = best_r
-                _profit(D, n, U, k, R, m, C1[depth], s, As, Bs, P)
-                lap = _lap_max(P, k, m, col)
-                if stride == 1 and _clock() - start > budget:  # a large node's bound takes seconds
-                    return best_r, best_t, False, nodes
-                cand[:] = t
-                for a in range(k):
-                    cand[U[a]] = R[col[a]]
-                r = _map_ratio(D, n, cand, iso2)
-                if r > best_r * (1.0 + 1e-12):  # primal candidate: the LAP completion
-                    best_r = r
-                    best_t = cand.copy()
-                    if r == np.inf:
-                        return best_r, best_t, True, nodes
-                    s = best_r
-                    _profit(D, n, U, k, R, m, C1[depth], s, As, Bs, P)
-                    lap = _lap_max(P, k, m, col)
-                const = d2A[depth] - s * dist2A[depth]
-                if const + lap > tol:
-                    # Branch: first fail on the row-max estimate, ties to distinctive rows.
-                    total = 0.0
-                    for a in range(k):
-                        rowmax[a] = P[a, :m].max()
-                        total += rowmax[a]
-                    best_i, best_c = 0, np.inf
-                    for a in range(k):
-                        cnt = 0
-                        for b in range(m):
-                            alive[a, b] = const + total - rowmax[a] + P[a, b] > tol
-                            cnt += alive[a, b]
-                        c = cnt - 0.5 * spread[U[a]]
-                        if c < best_c:
-                            best_c, best_i = c, a
-                    u_at[depth] = U[best_i]
-                    order[:m] = np.argsort(-P[best_i, :m])
-                    for q in range(m):
-                        b = order[q]
-                        if not alive[best_i, b]:
-                            continue
-                        if stride == 1 and _clock() - start > budget:  # large nodes: one LAP per child
-                            return best_r, best_t, False, nodes
-                        if k > 2:  # the same bound with T u = y forced
-                            ra = 0
-                            for a in range(k):
-                                if a == best_i:
-                                    continue
-                                cb = 0
-                                for bb in range(m):
-                                    if bb != b:
-                                        Pr[ra, cb] = P[a, bb]
-                                        cb += 1
-                                ra += 1
-                            if const + P[best_i, b] + _lap_max(Pr, k - 1, m - 1, col) <= tol:
-                                continue
-                        kids[depth, nkids[depth]] = R[b]
-                        nkids[depth] += 1
-        # ---- move: into the next child, or back up ----
-        if pos[depth] < nkids[depth]:
-            u = u_at[depth]
-            y = kids[depth, pos[depth]]
-            pos[depth] += 1
-            if t[u] >= 0:  # undo the previous sibling
-                used_t[t[u]] = False
-            d2A[depth + 1] = d2A[depth] + D[u, y] ** 2
-            dist2A[depth + 1] = dist2A[depth] + 2.0 * C1[depth, u, y]
-            for x in range(n):
-                for z in range(M):
-                    dd = D[x, u] - D[z, y]
-                    C1[depth + 1, x, z] = C1[depth, x, z] + dd * dd
-            t[u] = y
-            used_t[y] = True
+            status, best_r, best_t = _visit(tree, stack, work, depth, best_r, best_t, clock)
+            if status != 0:
+                return best_r, best_t, status == 2, nodes
+        # move: into the next child, or back up
+        if stack.pos[depth] < stack.nkids[depth]:
+            _descend(tree, stack, depth)
             depth += 1
             enter = True
         else:
             if depth == 0:
                 break
             depth -= 1
-            if pos[depth] >= nkids[depth]:  # the parent is done too: undo its assignment
-                u = u_at[depth]
-                used_t[t[u]] = False
-                t[u] = -1
+            if stack.pos[depth] >= stack.nkids[depth]:  # the parent is done too: undo its assignment
+                u = stack.u_at[depth]
+                stack.used[stack.t[u]] = False
+                stack.t[u] = -1
     return best_r, best_t, True, nodes

@@ -24,8 +24,15 @@ and ``apply_reassign`` update a full G for callers that keep one (the CNBS warm
 starts).  Everything here is ``numba.njit(cache=True, nogil=True)``: the
 compilation is paid once per machine, not once per process, and searches run
 in parallel threads (the CNBS heat map).
+
+The arguments of :func:`local_search` come in three named tuples (numba compiles
+them like separate arguments): the search ``Space`` (fixed for a search stage),
+the ``Goal`` (what is maximised, when to stop) and the ``MapState`` (the map and
+its products, updated in place).
 """
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -36,20 +43,121 @@ MODE_FIXED_S = 1  # maximise d² − s·Dist² (one rung of the fixed-s ladder)
 MODE_BUDGET = 2  # maximise d² subject to Dist² ≤ s (the scale-aware score; infeasible: −excess)
 
 
+class Space(NamedTuple):
+    """Where :func:`local_search` moves: fixed for a whole search stage.
+
+    D : (M, M) float64 distance matrix; the samples are ``0..n-1``.
+    n : number of samples N.
+    free : int64 indices of the samples that may move (non-landmarks).
+    knn : (M, k) int64 nearest targets of each target (k = 0 when M == n: no
+        reassignment moves).
+    floor : Dist² values below it count as ``floor`` (``objective.isometry_floor``: a
+        ratio never divides by round-off; isometries are decided exactly by the caller).
+    """
+
+    D: np.ndarray
+    n: int
+    free: np.ndarray
+    knn: np.ndarray
+    floor: float
+
+
+class Goal(NamedTuple):
+    """What :func:`local_search` maximises and when it stops.
+
+    mode : ``MODE_RATIO``, ``MODE_FIXED_S`` or ``MODE_BUDGET`` (parameter ``s``).
+    max_moves : cap on accepted moves.
+    stop : stop as soon as the current value exceeds ``stop`` (``np.inf``: never).
+        The value only grows during the search, so a caller looking for a minimum
+        over several searches (the CNBS heat map's argmin) learns all it needs
+        once a search passes the incumbent.
+    anchors, anchor_budget : ``MODE_BUDGET`` only: anchor rows (landmark samples)
+        and the budget each of their distortions
+        ``Σ_x (D[l,x] − D[l,Tx])²`` must stay within (empty ``anchors``: none).
+    """
+
+    mode: int
+    s: float
+    max_moves: int
+    stop: float
+    anchors: np.ndarray
+    anchor_budget: float
+
+
+class MapState(NamedTuple):
+    """The map :func:`local_search` starts from, with its products (arrays updated in place).
+
+    t : (n,) int64 current map.
+    G : (n, M) ``objective.cross_product`` of ``t``: read, never written.
+    H : (M,) ``objective.image_energy`` of ``t``.
+    used : bool (M,), True for the targets in the image.
+    rows : current anchor-row distortions (``objective.anchor_rows`` of ``Goal.anchors``).
+    d2, dist2 : d²(T) and Dist²(T) of ``t``.
+    """
+
+    t: np.ndarray
+    G: np.ndarray
+    H: np.ndarray
+    used: np.ndarray
+    rows: np.ndarray
+    d2: float
+    dist2: float
+
+
+class _Tables(NamedTuple):
+    """What the scan of :func:`local_search` reads, kept exact under every move (its Notes),
+    and its work buffers."""
+
+    P: np.ndarray  # P[x, x'] = G[x, t x']
+    R: np.ndarray  # R[a, b] = P[a, b] + P[b, a] + 2 D[a, b] D[ta, tb]
+    Q: np.ndarray  # Q[a, b] = D[a, tb]² + D[b, ta]²
+    Gk: np.ndarray  # Gk[a, q] = G[a, knn[ta, q]]
+    pd: np.ndarray  # P[x, x]
+    dd: np.ndarray  # D[x, t x]²
+    isfree: np.ndarray
+    buf: np.ndarray  # one row of candidate values
+    drl: np.ndarray  # change of the anchor rows under one move
+    zero: np.ndarray  # no change of the anchor rows
+    dv: np.ndarray  # the rank-1 term of a move: G' = G + c ⊗ dv
+    c: np.ndarray
+    w: np.ndarray  # dv at the images: w[x'] = dv[t x']
+
+
+@njit(cache=True, nogil=True)
+def _image_change(D, old, new, out):
+    """out[y] = D[new, y] − D[old, y]: the change of a row of D when an image moves."""
+    for y in range(D.shape[0]):
+        out[y] = D[new, y] - D[old, y]
+
+
+@njit(cache=True, nogil=True)
+def _move_energy(D, H, old, new):
+    """H += D[new]² − D[old]²: ``image_energy`` after one image moves from ``old`` to ``new``."""
+    for y in range(D.shape[0]):
+        H[y] += D[new, y] * D[new, y] - D[old, y] * D[old, y]
+
+
+@njit(cache=True, nogil=True)
+def _add_outer(G, n, c, v):
+    """G[x, :] += c[x] v for the rows ``x < n`` with ``c[x] != 0`` (a rank-1 update)."""
+    for x in range(n):
+        cx = c[x]
+        if cx != 0.0:
+            for y in range(v.size):
+                G[x, y] += cx * v[y]
+
+
 @njit(cache=True, nogil=True)
 def apply_swap(D, n, t, G, a, b):
     """Exchange T(a) and T(b) and update ``G`` in place (rank-1, O(n·M))."""
     ta = t[a]
     tb = t[b]
-    M = D.shape[0]
-    v = np.empty(M)
-    for y in range(M):
-        v[y] = D[tb, y] - D[ta, y]
+    v = np.empty(D.shape[0])
+    _image_change(D, ta, tb, v)
+    c = np.empty(n)
     for x in range(n):
-        c = D[x, a] - D[x, b]
-        if c != 0.0:
-            for y in range(M):
-                G[x, y] += c * v[y]
+        c[x] = D[x, a] - D[x, b]
+    _add_outer(G, n, c, v)
     t[a] = tb
     t[b] = ta
 
@@ -58,17 +166,13 @@ def apply_swap(D, n, t, G, a, b):
 def apply_reassign(D, n, t, G, H, used, a, y0):
     """Send sample ``a`` to the free target ``y0``; update ``G``, ``H``, ``used``."""
     ta = t[a]
-    M = D.shape[0]
-    v = np.empty(M)
-    for y in range(M):
-        v[y] = D[y0, y] - D[ta, y]
+    v = np.empty(D.shape[0])
+    _image_change(D, ta, y0, v)
+    c = np.empty(n)
     for x in range(n):
-        c = D[x, a]
-        if c != 0.0:
-            for y in range(M):
-                G[x, y] += c * v[y]
-    for y in range(M):
-        H[y] += D[y0, y] * D[y0, y] - D[ta, y] * D[ta, y]
+        c[x] = D[x, a]
+    _add_outer(G, n, c, v)
+    _move_energy(D, H, ta, y0)
     used[ta] = False
     used[y0] = True
     t[a] = y0
@@ -102,8 +206,9 @@ def _pair_row(D, n, t, P, R, Q, a):
 
 
 @njit(cache=True, nogil=True)
-def _setup(D, n, t, G, knn):
-    """Gather the tables the scan reads row-wise (see ``local_search``)."""
+def _tables(space, goal, state):
+    """Gather the tables the scan reads row-wise (``local_search``'s Notes) and its buffers."""
+    D, n, knn, t, G = space.D, space.n, space.knn, state.t, state.G
     k = knn.shape[1]
     P = np.empty((n, n))
     R = np.empty((n, n))
@@ -117,7 +222,18 @@ def _setup(D, n, t, G, knn):
     for a in range(n):
         for b in range(n):
             R[a, b], Q[a, b] = _entries(D, t, P, a, b)
-    return P, R, Q, Gk
+    isfree = np.zeros(n, dtype=np.bool_)
+    for i in range(space.free.shape[0]):
+        isfree[space.free[i]] = True
+    pd = np.empty(n)
+    dd = np.empty(n)
+    for x in range(n):
+        pd[x] = P[x, x]
+        u = D[x, t[x]]
+        dd[x] = u * u
+    na = goal.anchors.size
+    return _Tables(P, R, Q, Gk, pd, dd, isfree, np.empty(n), np.zeros(na), np.zeros(na),
+                   np.empty(D.shape[0]), np.empty(n), np.empty(n))
 
 
 @njit(cache=True, nogil=True)
@@ -191,40 +307,167 @@ def _move_rows_delta(D, lrows, a, ta, y, drl):
         drl[i] = x1 * x1 - y1 * y1
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _swap_value(b2, bS, q_ab, dd_b, r_ab, pd_b):
+    """(d², Dist²) after the swap (a b), from ``b2 = d² − D[a,ta]²``, ``bS = Dist² + 4 P[a,a]`` and
+    the table entries ``Q[a,b]``, ``D[b,tb]²``, ``R[a,b]``, ``P[b,b]`` (``local_search``'s Notes)."""
+    return b2 + q_ab - dd_b, bS - 4.0 * (r_ab - pd_b)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _reassign_value(b2, dist2, day, dty, gk, pd_a, h_y, h_ta):
+    """(d², Dist²) after sending ``a`` from ``ta`` to a free target ``y`` (``objective.reassign_delta``),
+    from ``b2 = d² − D[a,ta]²``, ``day = D[a,y]``, ``dty = D[ta,y]``, ``gk = G[a,y]``, ``pd_a = G[a,ta]``,
+    ``h_y = H[y]`` and ``h_ta = H[ta]``."""
+    dS = 2.0 * (gk - pd_a)
+    return b2 + day * day, dist2 + 2.0 * (h_y - dty * dty - h_ta) - 2.0 * dS
+
+
 @njit(cache=True, nogil=True)
-def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_moves, stop,
-                 lrows, rl, lb):
+def _rows_change(space, goal, state, tab, a, b, swap):
+    """Fill ``tab.drl`` with the change of the anchor rows under a move: the swap (a b) when
+    ``swap``, else the reassignment of ``a`` to the target ``b``."""
+    t = state.t
+    if swap:
+        _swap_rows_delta(space.D, goal.anchors, a, b, t[a], t[b], tab.drl)
+    else:
+        _move_rows_delta(space.D, goal.anchors, a, t[a], b, tab.drl)
+
+
+@njit(cache=True, nogil=True)
+def _best_move(space, goal, state, tab, d2, dist2, cur):
+    """One best-improvement scan over every swap and reassignment of the free samples.
+
+    Returns ``(kind, a, b, q)``: kind 0 the swap (a b), kind 1 the reassignment of ``a``
+    to ``b = knn[T a, q]``, kind -1 no move improves ``cur`` (by more than round-off).
+    The tables are taken out of their tuples once: the rows run in one loop, at the speed
+    of a single function (a call per row with the tuples cost 25 % more per move).
+    """
+    D, n, free, knn, floor = space.D, space.n, space.free, space.knn, space.floor
+    mode, s, lrows, lb = goal.mode, goal.s, goal.anchors, goal.anchor_budget
+    t, H, used, rl = state.t, state.H, state.used, state.rows
+    Q, R, Gk, pd, dd, isfree, buf, drl = tab.Q, tab.R, tab.Gk, tab.pd, tab.dd, tab.isfree, tab.buf, tab.drl
+    nl = lrows.size if mode == MODE_BUDGET else 0
+    best = cur + 1e-12 * abs(cur)
+    kind, ba, bb, bq = -1, -1, -1, -1
+    for i in range(free.shape[0]):
+        a = free[i]
+        ta = t[a]
+        b2 = d2 - dd[a]
+        bS = dist2 + 4.0 * pd[a]
+        # swaps (a b), b > a: a branch-free row of candidate values (vectorises), v - best,
+        # then the positive ones
+        for b in range(a + 1, n):
+            nd2, nds = _swap_value(b2, bS, Q[a, b], dd[b], R[a, b], pd[b])
+            v = _value(mode, s, nd2, nds, floor)
+            buf[b] = (v - best) if isfree[b] else -1.0
+        for b in range(a + 1, n):
+            if buf[b] > 0.0:
+                nd2, nds = _swap_value(b2, bS, Q[a, b], dd[b], R[a, b], pd[b])
+                v = _value(mode, s, nd2, nds, floor)
+                if v <= best:
+                    continue
+                if nl > 0:
+                    _swap_rows_delta(D, lrows, a, b, ta, t[b], drl)
+                    v = _anchored(s, nd2, nds, rl, drl, lb)
+                    if v <= best:
+                        continue
+                best, kind, ba, bb = v, 0, a, b
+        # reassignments of a to a free target among the nearest of its image
+        for q in range(knn.shape[1]):
+            y = knn[ta, q]
+            if used[y]:
+                continue
+            nd2, nds = _reassign_value(b2, dist2, D[a, y], D[ta, y], Gk[a, q], pd[a], H[y], H[ta])
+            v = _value(mode, s, nd2, nds, floor)
+            if v > best and nl > 0:
+                _move_rows_delta(D, lrows, a, ta, y, drl)
+                v = _anchored(s, nd2, nds, rl, drl, lb)
+            if v > best:
+                best, kind, ba, bb, bq = v, 1, a, y, q
+    return kind, ba, bb, bq
+
+
+@njit(cache=True, nogil=True)
+def _rank1_tables(space, state, tab):
+    """P += c wᵀ, R += c wᵀ + w cᵀ and Gk += c ⊗ dv at the neighbours: a move's rank-1 term
+    (the rows and columns of the moved samples are rebuilt afterwards)."""
+    n, knn, t = space.n, space.knn, state.t
+    P, R, Gk, c, w, dv = tab.P, tab.R, tab.Gk, tab.c, tab.w, tab.dv
+    k = knn.shape[1]
+    for xp in range(n):
+        w[xp] = dv[t[xp]]
+    for x in range(n):
+        cx = c[x]
+        wx = w[x]
+        for xp in range(n):
+            P[x, xp] += cx * w[xp]
+            R[x, xp] += cx * w[xp] + wx * c[xp]
+        if k > 0:
+            tx = t[x]
+            for q in range(k):
+                Gk[x, q] += cx * dv[knn[tx, q]]
+
+
+@njit(cache=True, nogil=True)
+def _apply_move(space, state, tab, kind, a, b):
+    """Make the move (kind 0: swap a b; kind 1: a to the target b) and update the tables."""
+    D, n, knn, t = space.D, space.n, space.knn, state.t
+    ta = t[a]
+    if kind == 0:
+        tb = t[b]
+        _image_change(D, ta, tb, tab.dv)
+        for x in range(n):
+            tab.c[x] = D[x, a] - D[x, b]
+        t[a] = tb
+        t[b] = ta
+        _swap_cols(tab.P, a, b)
+    else:
+        _image_change(D, ta, b, tab.dv)
+        _move_energy(D, state.H, ta, b)
+        for x in range(n):
+            tab.c[x] = D[x, a]
+        state.used[ta] = False
+        state.used[b] = True
+        t[a] = b
+    _rank1_tables(space, state, tab)
+    if kind == 1:
+        # column a of P is G'[:, b]: not derivable from P, computed directly
+        _g_column(D, n, t, b, tab.w, tab.c)
+        for x in range(n):
+            tab.P[x, a] = tab.c[x]
+    for j in range(2 if kind == 0 else 1):  # the rows of the moved samples, from their definitions
+        x = a if j == 0 else b
+        _pair_row(D, n, t, tab.P, tab.R, tab.Q, x)
+        if knn.shape[1] > 0:
+            _gk_row(D, n, t, knn, tab.Gk, x)
+        tab.dd[x] = D[x, t[x]] * D[x, t[x]]
+    for x in range(n):
+        tab.pd[x] = tab.P[x, x]
+
+
+@njit(cache=True, nogil=True)
+def local_search(space, goal, state):
     """Best-improvement local search over swaps and nearby reassignments.
 
     Parameters
     ----------
-    D : (M, M) float64 distance matrix; samples are ``0..n-1``.
-    t : (n,) int64 current map, modified in place; ``G``, ``H``, ``used``
-        (bool (M,), True for targets in the image) are kept consistent with it.
-    free : int64 indices of the samples that may move (non-landmarks).
-    knn : (M, k) int64 nearest targets of each target (k = 0 when M == n:
-        no reassignment moves).
-    mode : ``MODE_RATIO``, ``MODE_FIXED_S`` or ``MODE_BUDGET`` (parameter ``s``).
-    d2, dist2 : current d²(T) and Dist²(T).
-    floor : Dist² values below it count as ``floor`` (a ratio never divides by
-        round-off; isometries are decided exactly by the caller).
-    max_moves : cap on accepted moves.
-    stop : stop as soon as the current value exceeds ``stop`` (``np.inf``:
-        never).  The value only grows during the search, so a caller looking for
-        a minimum over several searches (the CNBS heat map's argmin) learns all it
-        needs once a search passes the incumbent.
-    lrows, rl, lb : ``MODE_BUDGET`` only: anchor rows (landmark samples), their
-        current distortions ``rl[i] = Σ_x (D[l,x] − D[l,Tx])²`` (updated in place)
-        and the budget ``lb`` each must stay within (empty ``lrows``: none).  A
-        move's value with anchors never exceeds its value without them, so the
-        anchor terms (O(L)) are evaluated only for moves that would be the best.
+    space : Space
+        D, N, the free samples, the neighbour lists of the targets, the isometry floor.
+    goal : Goal
+        The mode and its parameter ``s``, the cap on moves, the ``stop`` value and,
+        with a budget, the anchor rows.  A move's value with anchors never exceeds
+        its value without them, so the anchor terms (O(L)) are evaluated only for
+        moves that would be the best.
+    state : MapState
+        The start map with its products; ``t``, ``H``, ``used`` and ``rows`` are
+        updated in place and stay consistent with the map.
 
     Returns
     -------
-    (d2, dist2, moves) after the search; ``t``, ``used`` and ``H`` updated.  ``G``
-    is read, never written: on return it belongs to the starting map, and a
-    caller that needs it for the final map recomputes it
-    (``objective.cross_product``).
+    (d2, dist2, moves) after the search.  ``G`` is read, never written: on return
+    it belongs to the starting map, and a caller that needs it for the final map
+    recomputes it (``objective.cross_product``).
 
     Notes
     -----
@@ -244,151 +487,32 @@ def local_search(D, n, t, G, H, free, knn, used, mode, s, d2, dist2, floor, max_
     D) made a step 1.3x faster at M = n = 400, and dropping the O(n·M) update of
     G 1.6x at M = 3,200 on TOSCA cat0 (the project's kernel benchmark).
     """
-    nf = free.shape[0]
-    k = knn.shape[1]
-    M = D.shape[0]
-    P, R, Q, Gk = _setup(D, n, t, G, knn)
-    dv = np.empty(M)
-    c = np.empty(n)
-    w = np.empty(n)
+    tab = _tables(space, goal, state)
+    nl = goal.anchors.size if goal.mode == MODE_BUDGET else 0
+    d2 = state.d2
+    dist2 = state.dist2
     moves = 0
-    isfree = np.zeros(n, dtype=np.bool_)
-    for i in range(nf):
-        isfree[free[i]] = True
-    pd = np.empty(n)
-    dd = np.empty(n)
-    buf = np.empty(n)
-    nl = lrows.size if mode == MODE_BUDGET else 0
-    drl = np.zeros(lrows.size)
-    zero = np.zeros(lrows.size)
-    for x in range(n):
-        pd[x] = P[x, x]
-        u = D[x, t[x]]
-        dd[x] = u * u
-    while moves < max_moves:
-        cur = _value(mode, s, d2, dist2, floor) if nl == 0 else _anchored(s, d2, dist2, rl, zero, lb)
-        if cur > stop:
+    while moves < goal.max_moves:
+        if nl == 0:
+            cur = _value(goal.mode, goal.s, d2, dist2, space.floor)
+        else:
+            cur = _anchored(goal.s, d2, dist2, state.rows, tab.zero, goal.anchor_budget)
+        if cur > goal.stop:
             break
-        best = cur + 1e-12 * abs(cur)
-        kind = -1
-        ba = -1
-        bb = -1
-        bq = -1
-        for i in range(nf):
-            a = free[i]
-            ta = t[a]
-            b2 = d2 - dd[a]
-            bS = dist2 + 4.0 * pd[a]
-            # branch-free row of candidate values (vectorises): v - best, then the positive ones
-            for b in range(a + 1, n):
-                nd2 = b2 + Q[a, b] - dd[b]
-                nds = bS - 4.0 * (R[a, b] - pd[b])
-                v = _value(mode, s, nd2, nds, floor)
-                buf[b] = (v - best) if isfree[b] else -1.0
-            for b in range(a + 1, n):
-                if buf[b] > 0.0:
-                    nd2 = b2 + Q[a, b] - dd[b]
-                    nds = bS - 4.0 * (R[a, b] - pd[b])
-                    v = _value(mode, s, nd2, nds, floor)
-                    if v <= best:
-                        continue
-                    if nl > 0:
-                        _swap_rows_delta(D, lrows, a, b, ta, t[b], drl)
-                        v = _anchored(s, nd2, nds, rl, drl, lb)
-                        if v <= best:
-                            continue
-                    best = v
-                    kind = 0
-                    ba = a
-                    bb = b
-            for q in range(k):
-                y = knn[ta, q]
-                if used[y]:
-                    continue
-                day = D[a, y]
-                nd2 = b2 + day * day
-                dS = 2.0 * (Gk[a, q] - pd[a])
-                dty = D[ta, y]
-                nds = dist2 + 2.0 * (H[y] - dty * dty - H[ta]) - 2.0 * dS
-                v = _value(mode, s, nd2, nds, floor)
-                if v > best and nl > 0:
-                    _move_rows_delta(D, lrows, a, ta, y, drl)
-                    v = _anchored(s, nd2, nds, rl, drl, lb)
-                if v > best:
-                    best = v
-                    kind = 1
-                    ba = a
-                    bb = y
-                    bq = q
+        kind, a, b, q = _best_move(space, goal, state, tab, d2, dist2, cur)
         if kind < 0:
             break
-        ta = t[ba]
+        b2 = d2 - tab.dd[a]
         if kind == 0:
-            tb = t[bb]
-            bd2 = d2 - dd[ba] + Q[ba, bb] - dd[bb]
-            bdist = dist2 + 4.0 * pd[ba] - 4.0 * (R[ba, bb] - pd[bb])
+            d2, dist2 = _swap_value(b2, dist2 + 4.0 * tab.pd[a], tab.Q[a, b], tab.dd[b], tab.R[a, b], tab.pd[b])
         else:
-            day = D[ba, bb]
-            bd2 = d2 - dd[ba] + day * day
-            dty = D[ta, bb]
-            bdist = dist2 + 2.0 * (H[bb] - dty * dty - H[ta]) - 4.0 * (Gk[ba, bq] - pd[ba])
+            ta = state.t[a]
+            d2, dist2 = _reassign_value(b2, dist2, space.D[a, b], space.D[ta, b], tab.Gk[a, q], tab.pd[a],
+                                        state.H[b], state.H[ta])
         if nl > 0:  # the anchor rows after the chosen move
-            if kind == 0:
-                _swap_rows_delta(D, lrows, ba, bb, ta, t[bb], drl)
-            else:
-                _move_rows_delta(D, lrows, ba, ta, bb, drl)
+            _rows_change(space, goal, state, tab, a, b, kind == 0)
             for i in range(nl):
-                rl[i] += drl[i]
-        # the move, as G' = G + c ⊗ v (G itself is not kept: only the tables read from it)
-        if kind == 0:
-            for y in range(M):
-                dv[y] = D[tb, y] - D[ta, y]
-            for x in range(n):
-                c[x] = D[x, ba] - D[x, bb]
-            t[ba] = tb
-            t[bb] = ta
-            _swap_cols(P, ba, bb)
-        else:
-            y0 = bb
-            for y in range(M):
-                dv[y] = D[y0, y] - D[ta, y]
-                H[y] += D[y0, y] * D[y0, y] - D[ta, y] * D[ta, y]
-            for x in range(n):
-                c[x] = D[x, ba]
-            used[ta] = False
-            used[y0] = True
-            t[ba] = y0
-        for xp in range(n):
-            w[xp] = dv[t[xp]]
-        # P += c wᵀ; R += c wᵀ + w cᵀ (rows and columns of the moved samples rebuilt below)
-        for x in range(n):
-            cx = c[x]
-            wx = w[x]
-            for xp in range(n):
-                P[x, xp] += cx * w[xp]
-                R[x, xp] += cx * w[xp] + wx * c[xp]
-            if k > 0:
-                tx = t[x]
-                for q in range(k):
-                    Gk[x, q] += cx * dv[knn[tx, q]]
-        if kind == 1:
-            # column ba of P is G'[:, y0]: not derivable from P, computed directly
-            _g_column(D, n, t, y0, w, c)
-            for x in range(n):
-                P[x, ba] = c[x]
-        _pair_row(D, n, t, P, R, Q, ba)
-        if k > 0:
-            _gk_row(D, n, t, knn, Gk, ba)
-        if kind == 0:
-            _pair_row(D, n, t, P, R, Q, bb)
-            if k > 0:
-                _gk_row(D, n, t, knn, Gk, bb)
-        for x in range(n):
-            pd[x] = P[x, x]
-        dd[ba] = D[ba, t[ba]] * D[ba, t[ba]]
-        if kind == 0:
-            dd[bb] = D[bb, t[bb]] * D[bb, t[bb]]
-        d2 = bd2
-        dist2 = bdist
+                state.rows[i] += tab.drl[i]
+        _apply_move(space, state, tab, kind, a, b)
         moves += 1
     return d2, dist2, moves

@@ -142,6 +142,54 @@ def probe_ratio(D: np.ndarray, Dt: np.ndarray, landmarks=()) -> float | None:
     return float(np.sqrt(np.sum(D[np.arange(D.shape[0]), t] ** 2))) / dist
 
 
+def _relabelled(D, t):
+    """``D*`` with ``D*[t x, t x'] = D[x, x']``: the shape relabelled so that ``t`` is an isometry
+    X → X̃ (the construction of Theorem 4.1)."""
+    inv = np.empty(D.shape[0], dtype=np.int64)
+    inv[t] = np.arange(D.shape[0])
+    return D[np.ix_(inv, inv)]
+
+
+def _perturbed(D, kind, witness, free, noise, rng):
+    """The perturbed copy D̃ of one probe (``kappa_probes``): the witness construction, a blend
+    towards it or towards a random relabelling of the ``free`` samples (λ uniform in (0.55, 1)),
+    or symmetric Gaussian noise of standard deviation ``noise``, clipped at 0."""
+    n = D.shape[0]
+    if kind == "witness":
+        return _relabelled(D, witness)
+    if kind == "witness-blend":
+        lam = rng.uniform(0.55, 1.0)
+        return (1.0 - lam) * D + lam * _relabelled(D, witness)
+    if kind == "blend":
+        t = np.arange(n)
+        t[free] = rng.permutation(free)
+        lam = rng.uniform(0.55, 1.0)
+        return (1.0 - lam) * D + lam * _relabelled(D, t)
+    E = rng.standard_normal((n, n))
+    E = np.triu(E, 1)
+    return np.maximum(D + noise * (E + E.T), 0.0)
+
+
+def _checked(n, L, trials, scale, seed, time_limit, force):
+    """The probe parameters validated (``kappa_probes``'s Raises): (trials, scale, seed, time_limit)."""
+    free = n - len(L)
+    if free > MAX_PROBE_POINTS:
+        raise TooLargeError(
+            f"kappa probes enumerate all {map_count(n, n, len(L))} maps per trial; "
+            f"limited to {MAX_PROBE_POINTS} free samples, got {free} (use fewer points or more landmarks)"
+        )
+    trials = check_int(trials, "trials", lo=1)
+    scale = check_float(scale, "scale", lo=0.0, lo_open=True, hi=10.0)
+    seed = check_seed(seed)
+    if time_limit is not None:
+        time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
+    estimate = probe_seconds(n, len(L), trials)
+    if time_limit is None or estimate <= time_limit:
+        check_cost(f"{trials} kappa probes at N = {n} ({map_count(n, n, len(L))} maps each)", estimate,
+                   force=force, hint="use fewer --trials, a --time-limit, or --force")
+    return trials, scale, seed, time_limit
+
+
 def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float = 0.05,
                  time_limit: float | None = None, force: bool = False, progress=None) -> ProbeResult:
     """Probe κ with ``trials`` perturbed copies of ``D`` (module docstring).
@@ -176,21 +224,7 @@ def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float 
     """
     t0 = time.perf_counter()
     D, n, L = check_instance(D, None, landmarks)
-    free = n - len(L)
-    if free > MAX_PROBE_POINTS:
-        raise TooLargeError(
-            f"kappa probes enumerate all {map_count(n, n, len(L))} maps per trial; "
-            f"limited to {MAX_PROBE_POINTS} free samples, got {free} (use fewer points or more landmarks)"
-        )
-    trials = check_int(trials, "trials", lo=1)
-    scale = check_float(scale, "scale", lo=0.0, lo_open=True, hi=10.0)
-    seed = check_seed(seed)
-    if time_limit is not None:
-        time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
-    estimate = probe_seconds(n, len(L), trials)
-    if time_limit is None or estimate <= time_limit:
-        check_cost(f"{trials} kappa probes at N = {n} ({map_count(n, n, len(L))} maps each)", estimate,
-                   force=force, hint="use fewer --trials, a --time-limit, or --force")
+    trials, scale, seed, time_limit = _checked(n, L, trials, scale, seed, time_limit, force)
     deadline = None if time_limit is None else t0 + time_limit
     notes = []
     rng = np.random.default_rng(seed)
@@ -199,33 +233,13 @@ def kappa_probes(D, trials: int = 20, seed: int = 0, landmarks=(), scale: float 
     rms = float(np.sqrt(np.mean(D[~np.eye(n, dtype=bool)] ** 2)))
     freeidx = np.setdiff1d(np.arange(n), L)
     ratios, kinds = [], []
-
-    def relabelled(t):
-        inv = np.empty(n, dtype=np.int64)
-        inv[t] = np.arange(n)
-        return D[np.ix_(inv, inv)]  # D*[t x, t x'] = D[x, x']
-
     k = 0
     while len(ratios) < trials and k < 4 * trials + 8:
         kind = ("witness" if k == 0 else ("noise", "blend", "witness-blend")[(k - 1) % 3])
         k += 1
         if kind.startswith("witness") and (w is None or math.isinf(sigma)):
             continue
-        if kind == "witness":
-            Dt = relabelled(w)
-        elif kind == "witness-blend":
-            lam = rng.uniform(0.55, 1.0)
-            Dt = (1.0 - lam) * D + lam * relabelled(w)
-        elif kind == "blend":
-            t = np.arange(n)
-            t[freeidx] = rng.permutation(freeidx)
-            lam = rng.uniform(0.55, 1.0)
-            Dt = (1.0 - lam) * D + lam * relabelled(t)
-        else:
-            E = rng.standard_normal((n, n))
-            E = np.triu(E, 1)
-            Dt = np.maximum(D + scale * rms * (E + E.T), 0.0)
-        r = probe_ratio(D, Dt, L)
+        r = probe_ratio(D, _perturbed(D, kind, w, freeidx, scale * rms, rng), L)
         if r is None:
             continue
         ratios.append(r)

@@ -26,16 +26,17 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..jsonable import jsonable
 from ..errors import TooLargeError
 from ..limits import human_bytes, one_blas_thread
 from . import objective
+from ._result import FieldsToDict
 from ._bnb import branch_and_bound, ratio_of, swap_search
 from .objective import check_instance
+from .search import witness_search
 
 #: Largest number of maps enumerated (9! = 362 880, about 0.5 s).
 ENUMERATION_LIMIT = 362_880
@@ -43,7 +44,7 @@ _BLOCK = 16_384
 
 
 @dataclass(frozen=True)
-class ExactResult:
+class ExactResult(FieldsToDict):
     """Outcome of ``exact_sigma``.
 
     Attributes
@@ -69,10 +70,6 @@ class ExactResult:
     method: str
     lower: float = 0.0
     nodes: int = 0
-
-    def to_dict(self) -> dict:
-        """The fields as a dict as JSON-ready values (``shapecond.jsonable``)."""
-        return jsonable(asdict(self))
 
 
 def map_count(n: int, m: int, n_landmarks: int) -> int:
@@ -108,13 +105,13 @@ def _enumerate(D, n, L):
     ident = np.all(maps == np.arange(n), axis=1)
     maps = maps[~ident]
     Dx = D[:n, :n]
-    scale2 = float(np.sum(Dx**2))
+    floor = objective.isometry_floor(D, n)
     best_r, best_t = 0.0, None
     for s in range(0, maps.shape[0], _BLOCK):
         T = maps[s : s + _BLOCK]
         num = np.sum(D[np.arange(n), T] ** 2, axis=1)
         den = np.sum((Dx[None] - D[T[:, :, None], T[:, None, :]]) ** 2, axis=(1, 2))
-        iso = (den <= (objective.ISOMETRY_RTOL**2) * scale2) & (num > 0)
+        iso = (den <= floor) & (num > 0)
         if np.any(iso):
             return math.inf, T[int(np.argmax(iso))].copy(), maps.shape[0]
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -142,17 +139,16 @@ def _warm_start(D, n, L, warm=None):
 
     Only speeds the tree search up: its result never depends on the warm start.
     """
+    def admissible(w):  # an injective map of the N samples fixing every landmark
+        return w.shape == (n,) and np.unique(w).size == n and all(w[l] == l for l in L)
+
     if warm is not None:
         w = np.asarray(warm.witness, dtype=np.int64)
-        if w.shape == (n,) and np.unique(w).size == n and all(w[l] == l for l in L):
+        if admissible(w):
             return ratio_of(D, w), w
-    from .search import witness_search
-
     best = swap_search(D, n, L, np.random.default_rng(0))
-    res = witness_search(D, n_samples=n, landmarks=L, seed=0, effort="quick")
-    w = np.asarray(res.witness, dtype=np.int64)
-    valid = w.shape == (n,) and np.unique(w).size == n and all(w[l] == l for l in L)
-    if valid:
+    w = np.asarray(witness_search(D, n_samples=n, landmarks=L, seed=0, effort="quick").witness, dtype=np.int64)
+    if admissible(w):
         r = ratio_of(D, w)
         if r > best[0]:
             best = (r, w)

@@ -22,7 +22,8 @@ Incremental form used by the search.  Write
     H[y]    = Σ_{x'} D[T x', y]²              (M,     ``image_energy``)
 
 so that ``S = Σ_x G[x, T x]`` and a swap or a reassignment changes ``Dist²`` by
-a closed form in O(1) (``swap_delta``, ``reassign_delta``).
+a closed form in O(1) (``swap_delta``, ``reassign_delta``).  Swaps of the identity
+have their own closed form, all pairs at once (``swap_terms``).
 """
 
 from __future__ import annotations
@@ -107,11 +108,20 @@ def anchor_rows(D: np.ndarray, t, anchors) -> np.ndarray:
     return np.sum((D[np.ix_(a, np.arange(n))] - D[np.ix_(a, t)]) ** 2, axis=1)
 
 
-def is_isometry(D: np.ndarray, dist2_value: float, n: int | None = None) -> bool:
-    """True when a distortion ``dist2_value`` is round-off (see ``ISOMETRY_RTOL``)."""
+def isometry_floor(D, n: int | None = None) -> float:
+    """The largest Dist² that is round-off: ``ISOMETRY_RTOL² · ‖D_XX‖²_F`` over the first ``n`` points.
+
+    A map whose distortion (Eq. 3) is at most this is an isometry (σ = ∞, Eq. 5); every
+    decision "is this map an isometry?" compares against this one number.
+    """
+    D = np.asarray(D, dtype=np.float64)
     n = D.shape[0] if n is None else n
-    scale2 = float(np.sum(D[:n, :n] ** 2))
-    return dist2_value <= (ISOMETRY_RTOL**2) * scale2
+    return (ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2))
+
+
+def is_isometry(D: np.ndarray, dist2_value: float, n: int | None = None) -> bool:
+    """True when a distortion ``dist2_value`` is round-off (``isometry_floor``)."""
+    return dist2_value <= isometry_floor(D, n)
 
 
 def map_score(D: np.ndarray, t) -> float:
@@ -128,28 +138,6 @@ def map_score(D: np.ndarray, t) -> float:
     if is_isometry(D, den, t.size):
         return math.inf
     return math.sqrt(num / den)
-
-
-def lp_displacement(D: np.ndarray, t, p: float = 2.0) -> float:
-    """d_p(T) = (Σ_x D[x, T x]^p)^(1/p); ``p = inf`` gives max_x D[x, T x] (Eq. 2)."""
-    t = _as_map(D, t)
-    v = D[np.arange(t.size), t]
-    return _lp_norm(v, p)
-
-
-def lp_distortion(D: np.ndarray, t, p: float = 2.0) -> float:
-    """D_p(T) = (Σ_{x,x'} |D[x,x'] − D[Tx,Tx']|^p)^(1/p); ``p = inf`` gives the max (Eq. 3)."""
-    t = _as_map(D, t)
-    n = t.size
-    return _lp_norm(np.abs(D[:n, :n] - D[np.ix_(t, t)]).ravel(), p)
-
-
-def _lp_norm(v: np.ndarray, p: float) -> float:
-    if p == math.inf:
-        return float(np.max(np.abs(v))) if v.size else 0.0
-    if p < 1:
-        raise ValueError("p must be >= 1 or inf")
-    return float(np.sum(np.abs(v) ** p) ** (1.0 / p))
 
 
 def cross_product(D: np.ndarray, t) -> np.ndarray:
@@ -193,3 +181,22 @@ def reassign_delta(D: np.ndarray, t, G: np.ndarray, H: np.ndarray, a: int, y: in
     dS = 2.0 * (G[a, y] - G[a, ta])
     dC = 2.0 * (H[y] - D[ta, y] ** 2 - H[ta])
     return float(dd2), float(dC - 2.0 * dS)
+
+
+def swap_terms(X: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(d², Dist²) of every swap (a b) of two free samples, as |free| × |free| tables.
+
+    The identity with ``a`` and ``b`` exchanged has (Eqs. 2 and 3, ordered pairs)::
+
+        d²    = 2 X[a,b]²
+        Dist² = 4 Σ_{x ≠ a,b} (X[x,a] − X[x,b])² = 4 (K[a,a] + K[b,b] − 2 K[a,b] − 2 X[a,b]²)
+
+    with ``K = X X`` (``X`` = D over the samples, symmetric): all pairs from one O(N³)
+    product.  The diagonal is (0, 0).  The best single swap, the swap floor of σ and of
+    every CNBS heat map, reads this table.
+    """
+    Kx = X @ X
+    dg = np.diag(Kx)
+    Xf = X[np.ix_(free, free)]
+    Q = dg[free][:, None] + dg[free][None, :] - 2.0 * Kx[np.ix_(free, free)] - 2.0 * Xf**2
+    return 2.0 * Xf**2, 4.0 * np.maximum(Q, 0.0)

@@ -66,15 +66,15 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 import highspy
 
-from ..jsonable import jsonable
 from ..errors import TooLargeError
 from . import objective
+from ._result import FieldsToDict
 from .objective import check_instance
 
 #: Largest number of free points (bijection case) the LP is built for unless forced.
@@ -84,7 +84,7 @@ SAFETY = 1e-7
 
 
 @dataclass(frozen=True)
-class LPResult:
+class LPResult(FieldsToDict):
     """Outcome of ``lp_upper_bound``: ``upper`` >= σ(X) (``math.inf`` possible)."""
 
     upper: float
@@ -94,10 +94,6 @@ class LPResult:
     n_constraints: int = 0
     n_cuts: int = 0
 
-    def to_dict(self) -> dict:
-        """The fields as a dict as JSON-ready values (``shapecond.jsonable``)."""
-        return jsonable(asdict(self))
-
 
 def lp_size(n_free: int, n_targets: int) -> int:
     """Number of LP variables for ``n_free`` samples into ``n_targets`` targets."""
@@ -105,8 +101,94 @@ def lp_size(n_free: int, n_targets: int) -> int:
     return f * r + (f * (f - 1) // 2) * r * (r - 1) + 1
 
 
+class _Variables:
+    """The LP's variables (module docstring): ``X[i, a]`` (free sample i to free target a) at
+    ``xid(i, a)``, then the pair variables ``Y[(i,a),(j,b)]``, i < j, a != b, at ``yid`` (in the
+    order of ``I, J, A, B``), then ``τ``."""
+
+    def __init__(self, f, r):
+        self.f, self.r = f, r
+        self.nx = f * r
+        ii, jj = np.triu_indices(f, 1)
+        self.aa, self.bb = np.nonzero(~np.eye(r, dtype=bool))
+        self.I, self.J = np.repeat(ii, self.aa.size), np.repeat(jj, self.aa.size)
+        self.A, self.B = np.tile(self.aa, ii.size), np.tile(self.bb, ii.size)
+        self.ny = self.I.size
+        self.yid = self.nx + np.arange(self.ny)
+        self.tau = self.nx + self.ny
+        self.nvar = self.nx + self.ny + 1
+
+    def xid(self, i, a):
+        return i * self.r + a
+
+
+class _Rows:
+    """Constraint rows being assembled: equalities (``True``) and inequalities ``<= 0`` (``False``),
+    each kind numbered in the order its rows are added."""
+
+    def __init__(self):
+        self.parts = {True: ([], [], []), False: ([], [], [])}
+        self.count = {True: 0, False: 0}
+
+    def add(self, equality, n_rows, *entries):
+        """``n_rows`` more rows of a kind; each entry ``(row, column, value)`` (arrays, or a scalar
+        value), rows numbered from 0 within the new ones."""
+        rows, cols, vals = self.parts[equality]
+        for r, c, v in entries:
+            rows.append(self.count[equality] + r)
+            cols.append(c)
+            vals.append(np.broadcast_to(v, np.shape(r)).astype(float))
+        self.count[equality] += n_rows
+
+    def matrix(self, equality, nvar):
+        rows, cols, vals = self.parts[equality]
+        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                             shape=(self.count[equality], nvar))
+
+
+def _normalisation(D, L, F, R, v):
+    """Coefficients of Dist²(X, Y) (Eq. 3, ordered pairs: factor 2); a landmark's pairs with a free
+    sample give a linear term in X."""
+    q = np.zeros(v.nvar)
+    if L.size:
+        q[:v.nx] = 2.0 * ((D[np.ix_(L, F)][:, :, None] - D[np.ix_(L, R)][:, None, :]) ** 2).sum(0).ravel()
+    q[v.yid] = 2.0 * (D[F[v.I], F[v.J]] - D[R[v.A], R[v.B]]) ** 2
+    return q
+
+
+def _marginals(v, key_first, key_second, key_x, x_cols):
+    """Marginal rows ``Σ Y − X[j,b]``, one per key: each pair variable enters the row keyed by
+    ``key_first`` and the one keyed by ``key_second`` (one per end of the pair), each ``X`` (columns
+    ``x_cols``) the row of ``key_x`` with coefficient −1; rows numbered by increasing key.
+    Returns ``(n_rows, entry)`` for ``_Rows.add``."""
+    keys = np.concatenate([key_first, key_second, key_x])
+    cols = np.concatenate([v.yid, v.yid, x_cols])
+    vals = np.concatenate([np.ones(2 * v.ny), -np.ones(key_x.size)])
+    uniq, inv = np.unique(keys, return_inverse=True)
+    return uniq.size, (inv, cols, vals)
+
+
+def _row_marginals(v):
+    """Rows rm(i, j, b) = (i f + j) r + b: Σ_a Y[(i,a),(j,b)] − X[j,b] = 0 for ordered i != j."""
+    f, r = v.f, v.r
+    oi, oj = np.nonzero(~np.eye(f, dtype=bool))
+    ob = np.tile(np.arange(r), oi.size)
+    oi_r, oj_r = np.repeat(oi, r), np.repeat(oj, r)
+    return _marginals(v, (v.I * f + v.J) * r + v.B, (v.J * f + v.I) * r + v.A, (oi_r * f + oj_r) * r + ob,
+                      v.xid(oj_r, ob))
+
+
+def _column_marginals(v):
+    """Rows cm(j, b, a) = (j r + b) r + a, a != b: Σ_{i != j} Y[(i,a),(j,b)] − X[j,b] (= or <=) 0."""
+    f, r = v.f, v.r
+    cj = np.repeat(np.arange(f), v.aa.size)
+    cb, ca = np.tile(v.bb, f), np.tile(v.aa, f)
+    return _marginals(v, (v.J * r + v.B) * r + v.A, (v.I * r + v.A) * r + v.B, (cj * r + cb) * r + ca,
+                      v.xid(cj, cb))
+
+
 def build_lp(D: np.ndarray, n: int, landmarks=()):
-    """Charnes–Cooper form of the RLT-1 relaxation.
+    """Charnes–Cooper form of the RLT-1 relaxation (module docstring).
 
     Returns ``(c, A_eq, b_eq, A_ub, b_ub)`` for ``linprog`` (minimise ``c·z``,
     ``z >= 0``); the last variable is ``τ``.
@@ -115,101 +197,30 @@ def build_lp(D: np.ndarray, n: int, landmarks=()):
     L = np.asarray(list(landmarks), dtype=np.int64)
     F = np.setdiff1d(np.arange(n), L)
     R = np.setdiff1d(np.arange(M), L)
-    f, r = F.size, R.size
+    v = _Variables(F.size, R.size)
+    f, r, tau = v.f, v.r, v.tau
     inj = r > f
-    nx = f * r
-    # Pair variables (i, a, j, b) with i < j, a != b, flattened.
-    ii, jj = np.triu_indices(f, 1)
-    aa, bb = np.nonzero(~np.eye(r, dtype=bool))
-    I = np.repeat(ii, aa.size)
-    J = np.repeat(jj, aa.size)
-    A_ = np.tile(aa, ii.size)
-    B_ = np.tile(bb, ii.size)
-    ny = I.size
-    yid = nx + np.arange(ny)
-    tau = nx + ny
-    nvar = nx + ny + 1
-    xid = lambda i, a: i * r + a  # noqa: E731
-
     # Objective: maximise d²(X)  ->  minimise −d².
-    c = np.zeros(nvar)
-    c[:nx] = -(D[np.ix_(F, R)] ** 2).ravel()
-    # Normalisation Dist²(X, Y) = 1 (ordered pairs: factor 2).
-    q = np.zeros(nvar)
-    if L.size:
-        q[:nx] = 2.0 * ((D[np.ix_(L, F)][:, :, None] - D[np.ix_(L, R)][:, None, :]) ** 2).sum(0).ravel()
-    q[yid] = 2.0 * (D[F[I], F[J]] - D[R[A_], R[B_]]) ** 2
-
-    eq_rows, eq_cols, eq_vals = [], [], []
-    ub_rows, ub_cols, ub_vals = [], [], []
-    n_eq = 0
-    n_ub = 0
-
-    def add(rows, cols, vals, equality):
-        (eq_rows if equality else ub_rows).append(rows)
-        (eq_cols if equality else ub_cols).append(cols)
-        (eq_vals if equality else ub_vals).append(np.broadcast_to(vals, np.shape(rows)).astype(float))
-
-    # Normalisation row (equality 0).
+    c = np.zeros(v.nvar)
+    c[:v.nx] = -(D[np.ix_(F, R)] ** 2).ravel()
+    rows = _Rows()
+    # Normalisation Dist²(X, Y) = 1 (equality 0).
+    q = _normalisation(D, L, F, R, v)
     nz = np.flatnonzero(q)
-    add(np.zeros(nz.size, dtype=np.int64), nz, q[nz], True)
-    n_eq = 1
-    # Rows: Σ_a X[i,a] − τ = 0.
-    i_, a_ = np.divmod(np.arange(nx), r)
-    add(n_eq + i_, xid(i_, a_), 1.0, True)
-    add(n_eq + np.arange(f), np.full(f, tau), -1.0, True)
-    n_eq += f
-    # Columns: Σ_i X[i,a] − τ (= or <=) 0.
-    if inj:
-        add(n_ub + a_, xid(i_, a_), 1.0, False)
-        add(n_ub + np.arange(r), np.full(r, tau), -1.0, False)
-        n_ub += r
-    else:
-        add(n_eq + a_, xid(i_, a_), 1.0, True)
-        add(n_eq + np.arange(r), np.full(r, tau), -1.0, True)
-        n_eq += r
-    # Row marginals rm(i, j, b): Σ_a Y[(i,a),(j,b)] − X[j,b] = 0 for ordered i != j.
-    rm = lambda i, j, b: (i * f + j) * r + b  # noqa: E731
-    oi, oj = np.nonzero(~np.eye(f, dtype=bool))
-    ob = np.tile(np.arange(r), oi.size)
-    oi_r, oj_r = np.repeat(oi, r), np.repeat(oj, r)
-    rows_rm = np.concatenate([rm(I, J, B_), rm(J, I, A_), rm(oi_r, oj_r, ob)])
-    cols_rm = np.concatenate([yid, yid, xid(oj_r, ob)])
-    vals_rm = np.concatenate([np.ones(2 * ny), -np.ones(oi_r.size)])
-    uniq, inv = np.unique(rows_rm, return_inverse=True)
-    add(n_eq + inv, cols_rm, vals_rm, True)
-    n_eq += uniq.size
-    # Column marginals cm(j, b, a), a != b: Σ_{i != j} Y[(i,a),(j,b)] − X[j,b] (= or <=) 0.
-    cm = lambda j, b, a: (j * r + b) * r + a  # noqa: E731
-    cj = np.repeat(np.arange(f), aa.size)
-    cb, ca = np.tile(bb, f), np.tile(aa, f)
-    rows_cm = np.concatenate([cm(J, B_, A_), cm(I, A_, B_), cm(cj, cb, ca)])
-    cols_cm = np.concatenate([yid, yid, xid(cj, cb)])
-    vals_cm = np.concatenate([np.ones(2 * ny), -np.ones(cj.size)])
-    uniq, inv = np.unique(rows_cm, return_inverse=True)
-    if inj:
-        add(n_ub + inv, cols_cm, vals_cm, False)
-        n_ub += uniq.size
-    else:
-        add(n_eq + inv, cols_cm, vals_cm, True)
-        n_eq += uniq.size
+    rows.add(True, 1, (np.zeros(nz.size, dtype=np.int64), nz, q[nz]))
+    # Rows Σ_a X[i,a] − τ = 0; columns Σ_i X[i,a] − τ (= or, injective maps, <=) 0.
+    i_, a_ = np.divmod(np.arange(v.nx), r)
+    rows.add(True, f, (i_, v.xid(i_, a_), 1.0), (np.arange(f), np.full(f, tau), -1.0))
+    rows.add(not inj, r, (a_, v.xid(i_, a_), 1.0), (np.arange(r), np.full(r, tau), -1.0))
+    rows.add(True, *_row_marginals(v))
+    rows.add(not inj, *_column_marginals(v))
     # Identity cut: Σ_i X[i, pos(F_i)] − (f − 2 or f − 1) τ <= 0.
     pos = np.searchsorted(R, F)
-    add(np.full(f, n_ub), xid(np.arange(f), pos), 1.0, False)
-    add(np.array([n_ub]), np.array([tau]), -float(f - (1 if inj else 2)), False)
-    n_ub += 1
-
-    def mat(rows, cols, vals, nrow):
-        return sp.csr_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(nrow, nvar)
-        )
-
-    A_eq = mat(eq_rows, eq_cols, eq_vals, n_eq)
-    b_eq = np.zeros(n_eq)
+    rows.add(False, 1, (np.zeros(f, dtype=np.int64), v.xid(np.arange(f), pos), 1.0),
+             (np.array([0]), np.array([tau]), -float(f - (1 if inj else 2))))
+    b_eq = np.zeros(rows.count[True])
     b_eq[0] = 1.0
-    A_ub = mat(ub_rows, ub_cols, ub_vals, n_ub)
-    b_ub = np.zeros(n_ub)
-    return c, A_eq, b_eq, A_ub, b_ub
+    return c, rows.matrix(True, v.nvar), b_eq, rows.matrix(False, v.nvar), np.zeros(rows.count[False])
 
 
 def lp_upper_bound(D, n_samples=None, landmarks=(), force=False, time_limit=None, cuts=True) -> LPResult:
@@ -250,10 +261,29 @@ def lp_upper_bound(D, n_samples=None, landmarks=(), force=False, time_limit=None
         )
     if f == 0 or (f < 2 and r == f):
         return LPResult(0.0, time.perf_counter() - t0, 0, "no-map")
-    c, A_eq, b_eq, A_ub, b_ub = build_lp(D, n, L)
+    h, n_rows = _highs_model(*build_lp(D, n, L))
+    ceiling = _isometry_ratio(D, n)
+    separate = _TriangleSeparator(n, M, L) if cuts else None
+    value, status, n_cuts = _solve_in_rounds(h, separate, ceiling, t0, time_limit)
+    ncon = n_rows + n_cuts
+    if status == "unbounded":
+        return LPResult(math.inf, time.perf_counter() - t0, nvar, "unbounded (isometry in the relaxation)", ncon,
+                        n_cuts)
+    if value is None:  # not even the first round finished
+        return LPResult(math.inf, time.perf_counter() - t0, nvar, "time-limit" if status == "optimal" else status,
+                        ncon, n_cuts)
+    if status != "optimal":
+        status = f"optimal before the last cut round ({status})"
+    seconds = time.perf_counter() - t0
+    if value >= ceiling:
+        return LPResult(math.inf, seconds, nvar, "optimal (ratio at isometry level)", ncon, n_cuts)
+    return LPResult(math.sqrt(value) * (1.0 + SAFETY), seconds, nvar, status, ncon, n_cuts)
+
+
+def _highs_model(c, A_eq, b_eq, A_ub, b_ub):
+    """A HiGHS instance holding the LP ``min c·z, A_eq z = b_eq, A_ub z <= b_ub, z >= 0`` at the
+    tolerances of the module docstring; returns it with its number of rows."""
     A = sp.vstack([A_eq, A_ub]).tocsc()
-    lower = np.concatenate([b_eq, np.full(b_ub.size, -highspy.kHighsInf)])
-    upper = np.concatenate([b_eq, b_ub])
     h = highspy.Highs()
     h.setOptionValue("output_flag", False)
     h.setOptionValue("primal_feasibility_tolerance", 1e-9)
@@ -263,50 +293,47 @@ def lp_upper_bound(D, n_samples=None, landmarks=(), force=False, time_limit=None
     lp.col_cost_ = c
     lp.col_lower_ = np.zeros(c.size)
     lp.col_upper_ = np.full(c.size, highspy.kHighsInf)
-    lp.row_lower_, lp.row_upper_ = lower, upper
+    lp.row_lower_ = np.concatenate([b_eq, np.full(b_ub.size, -highspy.kHighsInf)])
+    lp.row_upper_ = np.concatenate([b_eq, b_ub])
     lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
     lp.a_matrix_.start_ = A.indptr
     lp.a_matrix_.index_ = A.indices
     lp.a_matrix_.value_ = A.data
     h.passModel(lp)
-    separate = _TriangleSeparator(n, M, L) if cuts else None
-    n_cuts = 0
-    value = None  # optimum of the last round solved: an upper bound whatever follows
-    status_text = "optimal"
+    return h, A.shape[0]
+
+
+def _solve_in_rounds(h, separate, ceiling, t0, time_limit):
+    """Solve, then, with a ``separate``-or, add the violated triangle inequalities and solve again
+    until none is violated or the value reaches ``ceiling`` (an isometry's ratio).
+
+    Returns ``(value, status, n_cuts)``: the optimum of the last round solved (None when not
+    even the first finished; an upper bound whatever follows) and "optimal", "unbounded",
+    "time-limit" or the solver's status of the round that did not finish.
+    """
+    n_cuts, value = 0, None
     while True:
         if time_limit is not None:
             left = float(time_limit) - (time.perf_counter() - t0)
             if left <= 0:
-                break
+                return value, "optimal", n_cuts
             h.setOptionValue("time_limit", left)
         h.run()
         status = h.getModelStatus()
         if status in (highspy.HighsModelStatus.kUnbounded, highspy.HighsModelStatus.kUnboundedOrInfeasible):
-            return LPResult(math.inf, time.perf_counter() - t0, nvar,
-                            "unbounded (isometry in the relaxation)", A.shape[0] + n_cuts, n_cuts)
+            return value, "unbounded", n_cuts
         if status != highspy.HighsModelStatus.kOptimal:
-            status_text = ("time-limit" if status == highspy.HighsModelStatus.kTimeLimit
-                           else f"solver: {h.modelStatusToString(status)}")
-            break
+            return value, ("time-limit" if status == highspy.HighsModelStatus.kTimeLimit
+                           else f"solver: {h.modelStatusToString(status)}"), n_cuts
         value = max(-float(h.getInfo().objective_function_value), 0.0)
-        if separate is None or value >= _isometry_ratio(D, n):
-            break
+        if separate is None or value >= ceiling:
+            return value, "optimal", n_cuts
         rows = separate(np.asarray(h.getSolution().col_value))
         if rows is None:
-            break
+            return value, "optimal", n_cuts
         h.addRows(rows.shape[0], np.full(rows.shape[0], -highspy.kHighsInf), np.zeros(rows.shape[0]),
                   rows.nnz, rows.indptr.astype(np.int32), rows.indices.astype(np.int32), rows.data)
         n_cuts += rows.shape[0]
-    ncon = A.shape[0] + n_cuts
-    if value is None:  # not even the first round finished
-        return LPResult(math.inf, time.perf_counter() - t0, nvar,
-                        "time-limit" if status_text == "optimal" else status_text, ncon, n_cuts)
-    if status_text != "optimal":
-        status_text = f"optimal before the last cut round ({status_text})"
-    seconds = time.perf_counter() - t0
-    if value >= _isometry_ratio(D, n):
-        return LPResult(math.inf, seconds, nvar, "optimal (ratio at isometry level)", ncon, n_cuts)
-    return LPResult(math.sqrt(value) * (1.0 + SAFETY), seconds, nvar, status_text, ncon, n_cuts)
 
 
 class _TriangleSeparator:
@@ -398,7 +425,7 @@ def _isometry_ratio(D: np.ndarray, n: int) -> float:
     pos = rows[rows > 0]
     if pos.size == 0:
         return math.inf
-    return float(pos.min()) ** 2 / ((objective.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2)))
+    return float(pos.min()) ** 2 / objective.isometry_floor(D, n)
 
 
 __all__ = ["LPResult", "lp_upper_bound", "MAX_LP_POINTS", "build_lp", "lp_size"]

@@ -49,7 +49,7 @@ from shapecond.jsonable import jsonable
 from shapecond.limits import one_blas_thread, search_seconds
 from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.search import (DENSE_K, EFFORTS, MapPool, SearchResult, SearchStage, _prepare,
+from shapecond.symmetry.search import (DENSE_K, EFFORTS, MapPool, SearchResult, SearchStage, prepare_instance,
                                       best_reassignment, witness_search)
 from shapecond.symmetry.starts import reflection_starts
 
@@ -122,7 +122,7 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
     distinct maps, the given ones included, as a ``SearchResult``.
     """
     t0 = time.perf_counter()
-    D, n, lm, free = _prepare(D, n_samples, landmarks)
+    D, n, lm, free = prepare_instance(D, n_samples, landmarks)
     stage = SearchStage(D, n, free, DENSE_K)
     pool = MapPool(D, n, budget, lm)
     mode, s = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
@@ -151,7 +151,7 @@ def coarse_to_fine(D, n_samples, landmarks=(), seed=0, effort="default", starts=
     On the eight TOSCA null shapes (N = 400, M = 3,200) σ is as high as a full
     search over Y, or higher, in less time.
     """
-    D, n, lm, free = _prepare(D, n_samples, landmarks)
+    D, n, lm, free = prepare_instance(D, n_samples, landmarks)
     m_lo = coarse_level(D.shape[0], n)
     lo_starts = [t for t in starts if np.max(t) < m_lo]
     coarse = witness_search(D[:m_lo, :m_lo], n, lm, seed=seed, effort=effort, starts=lo_starts, budget=budget)

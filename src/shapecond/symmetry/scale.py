@@ -54,8 +54,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shapecond.errors import InputError
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.search import _prepare, witness_search
+from shapecond.symmetry.search import prepare_instance, witness_search
 
 
 def default_epsilon(D, n_samples=None) -> float:
@@ -82,12 +83,12 @@ def budget_of(epsilon: float, n: int, D=None) -> float:
     """Dist² budget of an RMS distortion ε over N samples: (εN)².
 
     With ``D`` it is at least the round-off level of an isometry
-    (``objective.ISOMETRY_RTOL``), so that ε = 0 admits the exact symmetries of
+    (``objective.isometry_floor``), so that ε = 0 admits the exact symmetries of
     stored (rounded) data.
     """
     b = (float(epsilon) * n) ** 2
     if D is not None:
-        b = max(b, obj.ISOMETRY_RTOL ** 2 * float(np.sum(np.asarray(D)[:n, :n] ** 2)))
+        b = max(b, obj.isometry_floor(D, n))
     return b
 
 
@@ -118,6 +119,12 @@ class ScaleScore:
     landmarks: tuple
     seconds: float
     maps: tuple = field(default=(), repr=False)
+
+    def __repr__(self) -> str:
+        kind = " (an isometry)" if self.isometry else ""
+        return (f"ScaleScore(delta={self.displacement:.4g} at epsilon={self.epsilon:.4g} (x{self.amplification:.3g}), "
+                f"distortion {self.distortion:.4g}, witness moves {self.moved:.0%} of the samples{kind}, "
+                f"N={self.n_points}, M={self.n_targets}, {len(self.landmarks)} landmarks, {self.seconds:.2f} s)")
 
     @property
     def amplification(self) -> float:
@@ -155,11 +162,9 @@ def scale_score(D, n_samples=None, landmarks=(), epsilon=None, seed=0, effort="d
     seed, effort, starts, time_limit : passed to ``witness_search``.
     """
     t0 = time.perf_counter()
-    D, n, lm, _ = _prepare(D, n_samples, landmarks)
+    D, n, lm, _ = prepare_instance(D, n_samples, landmarks)
     eps = default_epsilon(D, n) if epsilon is None else float(epsilon)
     if not (eps >= 0 and math.isfinite(eps)):
-        from shapecond.errors import InputError
-
         raise InputError(f"the distortion level epsilon must be a finite number >= 0, got {epsilon}")
     res = witness_search(D, n, lm, seed=seed, starts=starts, effort=effort, time_limit=time_limit,
                          budget=budget_of(eps, n, D))

@@ -25,11 +25,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from shapecond._options import merge_options, with_options
 from shapecond.jsonable import jsonable
 from shapecond.errors import InputError, TooLargeError
 from shapecond.limits import check_cost, search_seconds
+from shapecond.symmetry.exact import exact_sigma, map_count
 from shapecond.symmetry.resolution import coarse_to_fine, two_levels
-from shapecond.symmetry.search import _prepare, best_single_swap, witness_search
+from shapecond.symmetry.search import best_single_swap, prepare_instance, witness_search
 
 #: ``exact="auto"`` computes σ exactly when enumeration is quick (<= this many maps).
 AUTO_EXACT_MAPS = 362_880  # 9!: about half a second
@@ -69,6 +71,13 @@ class SymmetryScore:
     sigmas: tuple = ()
     notes: tuple = ()
     coarse: object = field(default=None, repr=False)
+
+    def __repr__(self) -> str:
+        moved = int(np.sum(np.asarray(self.witness) != np.arange(len(self.witness))))
+        return (f"SymmetryScore(sigma in [{self.sigma_lower:.4g}, {self.sigma_upper:.4g}] ({self.upper_method}), "
+                f"swap floor {self.swap_floor:.4g}, N={self.n_points}, M={self.n_targets}, "
+                f"{len(self.landmarks)} landmarks, witness moves {moved} of {self.n_points} samples, "
+                f"{len(self.notes)} notes, {self.seconds:.2f} s)")
 
     @property
     def sigma_hat_lower(self) -> float:
@@ -111,21 +120,16 @@ def check_exact(exact):
 
 def _exact_wanted(exact, n, m, n_landmarks) -> bool:
     if check_exact(exact) == "auto":
-        from shapecond.symmetry.exact import map_count
-
         return map_count(n, m, n_landmarks) <= AUTO_EXACT_MAPS
     return bool(exact)
 
 
-def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, time_limit=10.0, seed=0,
-                   effort="default", force=False, search=None) -> SymmetryScore:
-    """Bracket of the global symmetry score σ(X) (Eq. 5) and of κ (Theorem 4.1).
+@dataclass(frozen=True)
+class ScoreOptions:
+    """How ``symmetry_score`` brackets σ.
 
-    Parameters
+    Attributes
     ----------
-    D : (M, M) distance matrix; the samples are the first ``n_samples`` points
-        (default M: bijections, the paper's score; M > N: dense targets).
-    landmarks : sample indices fixed by every map.
     exact : "auto" (only when enumeration is quick: at most ``AUTO_EXACT_MAPS``
         maps), True (enumeration or branch and bound within ``time_limit``) or False.
     upper : compute the LP upper bound when σ is not known exactly; refused
@@ -134,8 +138,29 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
     seed, effort : passed to ``witness_search``.
     force : run the exact and LP solves even beyond their memory and size limits
         (otherwise they are skipped with a note and the bracket keeps its bounds).
+    """
+
+    exact: object = "auto"
+    upper: bool = False
+    time_limit: float | None = 10.0
+    seed: int = 0
+    effort: str = "default"
+    force: bool = False
+
+
+@with_options(ScoreOptions)
+def symmetry_score(D, n_samples=None, landmarks=(), search=None, options=None, **kw) -> SymmetryScore:
+    """Bracket of the global symmetry score σ(X) (Eq. 5) and of κ (Theorem 4.1).
+
+    Parameters
+    ----------
+    D : (M, M) distance matrix; the samples are the first ``n_samples`` points
+        (default M: bijections, the paper's score; M > N: dense targets).
+    landmarks : sample indices fixed by every map.
     search : a ``witness_search`` result for the same D, N, landmarks and seed, to
         reuse instead of searching again (``api.SymmetryProblem`` keeps them).
+    options : ScoreOptions (``exact``, ``upper``, ``time_limit``, ``seed``, ``effort``,
+        ``force``); each of its fields may also be given as a keyword argument.
 
     With many dense targets (``resolution.two_levels``: N = 400, M = 3,200) the
     search runs over the first M/2 targets and its maps are then refined over
@@ -143,56 +168,69 @@ def symmetry_score(D, n_samples=None, landmarks=(), exact="auto", upper=False, t
     shapes for a fraction of the time, and the lower level is kept (``coarse``)
     for the resolution report.
     """
+    opts = merge_options(ScoreOptions, options, kw, "symmetry_score")
     t0 = time.perf_counter()
-    D, n, lm, _ = _prepare(D, n_samples, landmarks)
+    D, n, lm, _ = prepare_instance(D, n_samples, landmarks)
     m = D.shape[0]
     notes = []
-    coarse = None
-    if search is None:
-        check_cost(f"the witness search at N = {n}, M = {m}", search_seconds(n, m), force=force)
-        if two_levels(n, m):
-            res, coarse = coarse_to_fine(D, n, lm, seed=seed, effort=effort)
-        else:
-            res = witness_search(D, n, lm, seed=seed, effort=effort)
-    else:
-        res = search
+    res, coarse = (search, None) if search is not None else _search(D, n, lm, opts)
     floor = best_single_swap(D, n, lm)[0]
     lower, witness = res.sigma, res.witness
     sigma_exact, hi, method = None, math.inf, "none"
     if lower == math.inf:  # a non-identity isometry: σ = inf exactly, nothing to bound
         sigma_exact, hi, method = math.inf, math.inf, "isometry"
-    elif _exact_wanted(exact, n, m, lm.size):
-        from shapecond.symmetry.exact import exact_sigma
-
-        try:
-            ex = exact_sigma(D, n, lm, time_limit=time_limit, warm=res, force=force)
-        except TooLargeError as err:
-            ex = None
-            notes.append(f"exact σ not attempted: {err}")
-        if ex is None:
-            pass
-        elif ex.finished and ex.sigma is not None:
-            if ex.sigma >= lower * (1 - 1e-9):
-                sigma_exact = ex.sigma
-                lower = hi = ex.sigma
-                method = "exact"
-                if ex.witness is not None:
-                    witness = np.asarray(ex.witness, dtype=np.int64)
-            else:  # a map beats the "exact" value: trust the map, report it
-                notes.append(f"exact solver returned {ex.sigma:.6g} below the witness {lower:.6g}; ignored")
-        else:
-            notes.append(f"exact solver did not finish within {time_limit} s")
-    if method == "none" and upper and lower != math.inf:
-        from shapecond.symmetry.relax import lp_upper_bound
-
-        try:
-            lp = lp_upper_bound(D, n, lm, time_limit=time_limit, force=force)
-            hi, method = max(lp.upper, lower), "lp"
-            if lp.upper == math.inf and lp.status.startswith("time"):
-                notes.append(f"LP upper bound did not finish within {time_limit} s")
-        except TooLargeError as err:
-            notes.append(f"no upper bound: {err}")
+    elif _exact_wanted(opts.exact, n, m, lm.size):
+        exact = _exact(D, n, lm, res, opts, notes)
+        if exact is not None:
+            sigma_exact, witness = exact
+            lower = hi = sigma_exact
+            method = "exact"
+    if method == "none" and opts.upper and lower != math.inf:
+        hi, method = _lp_upper(D, n, lm, lower, opts, notes)
     return SymmetryScore(
         sigma_lower=lower, sigma_upper=hi, sigma_exact=sigma_exact, witness=witness, swap_floor=floor,
         n_points=n, n_targets=m, landmarks=tuple(int(v) for v in lm), seconds=time.perf_counter() - t0,
         upper_method=method, maps=res.maps, sigmas=res.sigmas, notes=tuple(notes), coarse=coarse)
+
+
+def _search(D, n, lm, opts):
+    """The witness search (over two levels of targets when ``resolution.two_levels``): (the search
+    result, its coarse level or None)."""
+    m = D.shape[0]
+    check_cost(f"the witness search at N = {n}, M = {m}", search_seconds(n, m), force=opts.force)
+    if two_levels(n, m):
+        return coarse_to_fine(D, n, lm, seed=opts.seed, effort=opts.effort)
+    return witness_search(D, n, lm, seed=opts.seed, effort=opts.effort), None
+
+
+def _exact(D, n, lm, res, opts, notes):
+    """``(σ, witness)`` from ``exact.exact_sigma`` warm-started from the search ``res``, or None
+    (with a note) when it was refused, did not finish, or came out below the search's witness
+    (a map beats the "exact" value: the map is trusted)."""
+    try:
+        ex = exact_sigma(D, n, lm, time_limit=opts.time_limit, warm=res, force=opts.force)
+    except TooLargeError as err:
+        notes.append(f"exact σ not attempted: {err}")
+        return None
+    if not (ex.finished and ex.sigma is not None):
+        notes.append(f"exact solver did not finish within {opts.time_limit} s")
+        return None
+    if ex.sigma >= res.sigma * (1 - 1e-9):
+        return ex.sigma, (res.witness if ex.witness is None else np.asarray(ex.witness, dtype=np.int64))
+    notes.append(f"exact solver returned {ex.sigma:.6g} below the witness {res.sigma:.6g}; ignored")
+    return None
+
+
+def _lp_upper(D, n, lm, lower, opts, notes):
+    """``(upper, method)`` from the LP relaxation (at least ``lower``), or ``(inf, "none")`` with a
+    note when it is refused."""
+    from shapecond.symmetry.relax import lp_upper_bound  # highspy: loaded only when an LP bound is asked for
+
+    try:
+        lp = lp_upper_bound(D, n, lm, time_limit=opts.time_limit, force=opts.force)
+    except TooLargeError as err:
+        notes.append(f"no upper bound: {err}")
+        return math.inf, "none"
+    if lp.upper == math.inf and lp.status.startswith("time"):
+        notes.append(f"LP upper bound did not finish within {opts.time_limit} s")
+    return max(lp.upper, lower), "lp"

@@ -88,8 +88,10 @@ class SearchResult:
                 "dist2": self.dist2, "sigmas": list(self.sigmas), "seconds": self.seconds})
 
 
-def _prepare(D, n_samples, landmarks):
-    """Validate the inputs (``objective.check_instance``); return (D, n, sorted landmarks, free samples)."""
+def prepare_instance(D, n_samples=None, landmarks=()):
+    """Validate a search instance (``objective.check_instance``): (contiguous D, N, sorted landmarks,
+    free samples).  ``InputError`` unless a map other than the identity fixes every landmark (two free
+    samples, or one with dense targets)."""
     D, n, lm = obj.check_instance(D, n_samples, landmarks)
     m = D.shape[0]
     D = np.ascontiguousarray(D)
@@ -104,15 +106,14 @@ def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
     """Exact best map that exchanges two free samples: (σ, a, b).
 
     For the swap (a b), d² = 2 D[a,b]² and Dist² = 4 Σ_{x ≠ a,b} (D[x,a] − D[x,b])²,
-    all pairs at once from K = D_XX² (one O(N³) product, then O(N²)).  Every
+    all pairs at once (``objective.swap_terms``: one O(N³) product, then O(N²)).  Every
     metric space has σ ≥ 1/sqrt(2(N − 2)) from these maps; a swap that is an isometry gives ``inf``.
     """
-    D, n, lm, free = _prepare(D, n_samples, landmarks)
+    D, n, lm, free = prepare_instance(D, n_samples, landmarks)
     if free.size < 2:
         return 0.0, -1, -1
-    X = D[:n, :n]
-    num, den = swap_terms(X, free)
-    iso = (den <= (obj.ISOMETRY_RTOL**2) * float(np.sum(X**2))) & (num > 0)
+    num, den = obj.swap_terms(D[:n, :n], free)
+    iso = (den <= obj.isometry_floor(D, n)) & (num > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         r = np.where(num > 0, num / np.where(den > 0, den, 1.0), -1.0)
     r[iso] = np.inf
@@ -120,19 +121,6 @@ def best_single_swap(D, n_samples=None, landmarks=()) -> tuple[float, int, int]:
     i, j = np.unravel_index(int(np.argmax(r)), r.shape)
     best = r[i, j]
     return (math.inf if best == np.inf else math.sqrt(max(best, 0.0))), int(free[i]), int(free[j])
-
-
-def swap_terms(X: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(d², Dist²) of every swap (a b) of two free samples, as |free| × |free| tables.
-
-    d² = 2 X[a,b]² and Dist² = 4 Σ_{x ≠ a,b} (X[x,a] − X[x,b])², all pairs from one
-    product ``X @ X`` (X = D over the samples, symmetric).
-    """
-    Kx = X @ X
-    dg = np.diag(Kx)
-    Xf = X[np.ix_(free, free)]
-    Q = dg[free][:, None] + dg[free][None, :] - 2.0 * Kx[np.ix_(free, free)] - 2.0 * Xf**2
-    return 2.0 * Xf**2, 4.0 * np.maximum(Q, 0.0)
 
 
 def best_reassignment(D, n, free) -> np.ndarray:
@@ -158,7 +146,7 @@ def best_reassignment(D, n, free) -> np.ndarray:
 def widest_swap(D, n, free, budget) -> tuple[int, int]:
     """The swap of two free samples with the largest d² among those with Dist² ≤ ``budget``
     (``(-1, -1)`` if none)."""
-    num, den = swap_terms(np.asarray(D)[:n, :n], free)
+    num, den = obj.swap_terms(np.asarray(D)[:n, :n], free)
     num = np.where(den <= budget, num, -1.0)
     np.fill_diagonal(num, -1.0)
     i, j = np.unravel_index(int(np.argmax(num)), num.shape)
@@ -183,24 +171,36 @@ class SearchStage:
             self.knn = np.ascontiguousarray(np.array(rows, dtype=np.int64))
         else:
             self.knn = np.zeros((m, 0), dtype=np.int64)
-        self.floor = (obj.ISOMETRY_RTOL**2) * float(np.sum(D[:n, :n] ** 2))
+        self.floor = obj.isometry_floor(D, n)
+
+    def space(self, free=None) -> K.Space:
+        """The compiled search's ``Space`` with the stage's free samples (or ``free``)."""
+        return K.Space(self.D, self.n, self.free if free is None else free, self.knn, self.floor)
+
+    def goal(self, mode=K.MODE_RATIO, s=0.0, anchors=(), max_moves=None, stop=math.inf) -> K.Goal:
+        """The compiled search's ``Goal``: ``mode`` with parameter ``s``, at most ``max_moves``
+        moves (default 50 N), stopping above ``stop``; ``anchors``: in ``MODE_BUDGET``, landmark
+        rows each kept within s / n."""
+        cap = 50 * self.n if max_moves is None else max_moves
+        return K.Goal(mode, float(s), cap, float(stop), np.asarray(anchors, dtype=np.int64), float(s) / self.n)
+
+    def start(self, t, anchors=()) -> K.MapState:
+        """The compiled search's ``MapState`` of map ``t`` (used as is, updated by the search):
+        its products G and H (``objective``), its image, its anchor rows, d² and Dist²."""
+        D = self.D
+        used = np.zeros(D.shape[0], dtype=bool)
+        used[t] = True
+        return K.MapState(t, obj.cross_product(D, t), obj.image_energy(D, t), used, obj.anchor_rows(D, t, anchors),
+                          obj.d2(D, t), obj.dist2(D, t))
 
     def polish(self, t, mode=K.MODE_RATIO, s=0.0, max_moves=None, anchors=()):
         """Local search from map t; returns the new map (t is not modified).
 
         ``anchors``: in ``MODE_BUDGET``, landmark rows each kept within s / n.
         """
-        D, n = self.D, self.n
         t = np.array(t, dtype=np.int64)
-        G = D[:n, :n] @ D[t, :]
-        H = np.sum(D[t, :] ** 2, axis=0)
-        used = np.zeros(D.shape[0], dtype=bool)
-        used[t] = True
-        cap = 50 * n if max_moves is None else max_moves
-        lrows = np.asarray(anchors, dtype=np.int64)
-        K.local_search(D, n, t, G, H, self.free, self.knn, used, mode, float(s),
-                       obj.d2(D, t), obj.dist2(D, t), self.floor, cap, np.inf,
-                       lrows, obj.anchor_rows(D, t, lrows), float(s) / n)
+        goal = self.goal(mode, s, anchors, max_moves)
+        K.local_search(self.space(), goal, self.start(t, goal.anchors))
         return t
 
     def polished(self, ts, mode=K.MODE_RATIO, s=0.0, anchors=()):
@@ -324,96 +324,137 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
     t_start = time.perf_counter()
     if effort not in EFFORTS:
         raise InputError(f"effort must be one of {sorted(EFFORTS)}, got {effort!r}")
-    cfg = EFFORTS[effort]
-    D, n, lm, free = _prepare(D, n_samples, landmarks)
-    m = D.shape[0]
-    rng = np.random.default_rng(seed)
+    D, n, lm, free = prepare_instance(D, n_samples, landmarks)
     deadline = math.inf if time_limit is None else t_start + float(time_limit)
-    pool = MapPool(D, n, budget, lm)
-    mode, s_obj = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
+    run = _SearchRun(D, n, lm, free, EFFORTS[effort], budget, np.random.default_rng(seed), deadline)
+    warm = [S.repair(t, n, D.shape[0], lm) for t in starts]
+    s_swap = run.single_swap()
+    run.run_all(run.bij, [t for t in warm if t.max() < n])
+    if free.size >= 3:
+        run.spectral()
+        s_ref = 1.0 / max(s_swap, 1e-6) ** 2 if math.isfinite(s_swap) else 1.0
+        run.ladder(run.gilmore_lawler(s_ref), s_ref)
+        run.random_starts()
+        run.kicks()
+    if run.dense is not None:
+        run.dense_refine([t for t in warm if t.max() >= n])
+    return run.pool.result(time.perf_counter() - t_start)
 
-    def late():
-        return time.perf_counter() > deadline or pool.best_value() == math.inf
 
-    bij = SearchStage(np.ascontiguousarray(D[:n, :n]), n, free, 0)
-    dense = SearchStage(D, n, free, DENSE_K) if m > n else None
-    warm = [S.repair(t, n, m, lm) for t in starts]
-    warm_bij = [t for t in warm if t.max() < n]
+class _SearchRun:
+    """One run of ``witness_search``: the pool of maps found, the search stages over X (``bij``)
+    and, with dense targets, over Y (``dense``), the random generator and the clock.  Each
+    method is one family of starts of the module docstring, in the order they run; every start
+    is polished and its local optimum added to the pool until ``late()``."""
 
-    def run_all(stage, ts):
+    def __init__(self, D, n, lm, free, cfg, budget, rng, deadline):
+        self.D, self.n, self.lm, self.free, self.cfg, self.budget = D, n, lm, free, cfg, budget
+        self.rng, self.deadline = rng, deadline
+        self.pool = MapPool(D, n, budget, lm)
+        self.mode, self.s = (K.MODE_RATIO, 0.0) if budget is None else (K.MODE_BUDGET, float(budget))
+        self.bij = SearchStage(np.ascontiguousarray(D[:n, :n]), n, free, 0)
+        self.dense = SearchStage(D, n, free, DENSE_K) if D.shape[0] > n else None
+
+    @property
+    def extra(self) -> int:
+        """Random starts and kicks at least: on small instances, where a local search costs
+        microseconds, ``EFFORTS[...]["small"] / n_free²``."""
+        return int(self.cfg["small"] / self.free.size**2)
+
+    def late(self) -> bool:
+        """Past the time limit, or an isometry found (σ = ∞: nothing can beat it)."""
+        return time.perf_counter() > self.deadline or self.pool.best_value() == math.inf
+
+    def run_all(self, stage, ts):
         """Polish every start of ``ts`` (``SearchStage.polished``), adding the results in order
         until ``late()``: the same pool as polishing them one after the other."""
-        done = stage.polished(ts, mode, s_obj, lm)
-        while not late():
+        done = stage.polished(ts, self.mode, self.s, self.lm)
+        while not self.late():
             item = next(done, None)
             if item is None:
                 return
-            pool.add(item[1])
+            self.pool.add(item[1])
 
-    def run(stage, t):
-        run_all(stage, [t])
-
-    # 1. best single swap (exact) and warm starts
-    s_swap = 0.0
-    if free.size >= 2:
-        s_swap, a, b = best_single_swap(D, n, lm)
-        if budget is not None:  # the widest swap within the budget instead
-            a, b = widest_swap(D, n, free, budget)
+    def single_swap(self) -> float:
+        """1. The best single swap (exact; with a budget the widest within it), kept and polished.
+        Returns σ of the best single swap (0 without two free samples)."""
+        D, n, free = self.D, self.n, self.free
+        if free.size < 2:
+            return 0.0
+        s_swap, a, b = best_single_swap(D, n, self.lm)
+        if self.budget is not None:  # the widest swap within the budget instead
+            a, b = widest_swap(D, n, free, self.budget)
         if a >= 0:
-            pool.add(S.swap_map(n, a, b))
-            run(bij, S.swap_map(n, a, b))
-    run_all(bij, warm_bij)
-    if free.size >= 3:
-        # 2. spectral sign-flip starts, the most promising ones polished
-        cand = S.spectral_starts(bij.D, free, cfg["vectors"], cfg["pairs"])
-        cand.sort(key=lambda t: -pool.value(t)[0])
-        run_all(bij, cand[: cfg["spectral"]])
-        if dense is None:  # with dense targets they are built over Y in step 7
-            run_all(bij, S.reflection_starts(bij.D, n, free, lm, *cfg["reflect"]))
-        # 3. Gilmore-Lawler assignment starts over a grid of s
-        s_ref = 1.0 / max(s_swap, 1e-6) ** 2 if math.isfinite(s_swap) else 1.0
-        grid = [s_ref * 4.0 ** (1 - j) for j in range(cfg["gl"])]
-        cand = S.gilmore_lawler_starts(bij.D, free, lm, grid)
-        gl_best = sorted(cand, key=lambda t: -pool.value(t)[0])
-        run_all(bij, gl_best[: cfg["gl_polish"]])
-        # 4. fixed-s ladder: maximise d² − s·Dist² for increasing s, polish each rung
-        for r in range(cfg["ladder"]):
-            t = gl_best[r] if r < len(gl_best) else S.random_start(rng, n, free)
+            self.pool.add(S.swap_map(n, a, b))
+            self.run_all(self.bij, [S.swap_map(n, a, b)])
+        return s_swap
+
+    def spectral(self):
+        """2. Spectral sign-flip starts, the most promising ones polished; without dense targets
+        the reflections of the MDS embedding too (with them they are built over Y, step 7)."""
+        cfg, bij = self.cfg, self.bij
+        cand = S.spectral_starts(bij.D, self.free, cfg["vectors"], cfg["pairs"])
+        cand.sort(key=lambda t: -self.pool.value(t)[0])
+        self.run_all(bij, cand[: cfg["spectral"]])
+        if self.dense is None:
+            self.run_all(bij, S.reflection_starts(bij.D, self.n, self.free, self.lm, *cfg["reflect"]))
+
+    def gilmore_lawler(self, s_ref) -> list:
+        """3. Gilmore-Lawler assignment starts over a grid of s around ``s_ref``; the best few
+        polished.  Returns all of them, best first."""
+        grid = [s_ref * 4.0 ** (1 - j) for j in range(self.cfg["gl"])]
+        cand = S.gilmore_lawler_starts(self.bij.D, self.free, self.lm, grid)
+        gl_best = sorted(cand, key=lambda t: -self.pool.value(t)[0])
+        self.run_all(self.bij, gl_best[: self.cfg["gl_polish"]])
+        return gl_best
+
+    def ladder(self, gl_best, s_ref):
+        """4. Fixed-s ladder: maximise d² − s·Dist² for increasing s from the best Gilmore-Lawler
+        starts (random ones beyond them), each rung's map polished on the ratio."""
+        bij, n = self.bij, self.n
+        for r in range(self.cfg["ladder"]):
+            t = gl_best[r] if r < len(gl_best) else S.random_start(self.rng, n, self.free)
             for j in range(6, -1, -1):
-                if late():
+                if self.late():
                     break
                 t = bij.polish(t, mode=K.MODE_FIXED_S, s=s_ref * 4.0**-j)
                 if np.any(t != np.arange(n)):
-                    run(bij, t)
-        # 5. random starts
-        extra = int(cfg["small"] / free.size**2)
+                    self.run_all(bij, [t])
+
+    def random_starts(self):
+        """5. Random bijections of the free samples."""
         # random starts end far below the structured ones on large shapes (TOSCA, N = 400:
         # σ 0.26 against 0.54) while costing the most moves: fewer of them there
+        cfg, free = self.cfg, self.free
         n_random = cfg["random"] if free.size <= 200 else cfg["random"] // 2
-        run_all(bij, [S.random_start(rng, n, free) for _ in range(max(n_random, extra))])
-        # 6. iterated local search: kick one of the best maps, polish
+        self.run_all(self.bij, [S.random_start(self.rng, self.n, free) for _ in range(max(n_random, self.extra))])
+
+    def kicks(self):
+        """6. Iterated local search: kick one of the three best maps, polish."""
+        rng, free = self.rng, self.free
         hi = kick_limit(free.size)
-        for i in range(max(cfg["kicks"], extra)):
-            if late():
+        for i in range(max(self.cfg["kicks"], self.extra)):
+            if self.late():
                 break
-            tops = pool.top(3)
+            tops = self.pool.top(3)
             base = tops[0][1] if i % 3 else tops[i // 3 % len(tops)][1]
-            run(bij, kick(rng, base, free, int(rng.integers(2, hi + 1))))
-    # 7. dense targets: refine the best bijections (and dense warm starts) over Y
-    if dense is not None:
-        refine = [it[1] for it in pool.top(cfg["dense"])]
-        refine += [t for t in warm if t.max() >= n]
+            self.run_all(self.bij, [kick(rng, base, free, int(rng.integers(2, hi + 1)))])
+
+    def dense_refine(self, warm_dense):
+        """7. Dense targets: the best bijections, the dense warm starts, the reflections of the MDS
+        embedding onto Y and the best single reassignment, polished over Y; then dense kicks."""
+        D, n, free, dense, rng = self.D, self.n, self.free, self.dense, self.rng
+        refine = [it[1] for it in self.pool.top(self.cfg["dense"])] + list(warm_dense)
         # reflections onto Y: the mirror of a TOSCA animal scores 1.2-1.9 as a
         # bijection of X (below the best swap, so never among the maps above)
         # but 3.3-3.7 over Y; no start built on X alone reaches that basin
-        refine += S.reflection_starts(D, n, free, lm, *cfg["reflect"])
+        refine += S.reflection_starts(D, n, free, self.lm, *self.cfg["reflect"])
         if free.size >= 1:
             refine.append(best_reassignment(D, n, free))
-        run_all(dense, refine)
-        for i in range(cfg["dense_kicks"]):
-            if late():
+        self.run_all(dense, refine)
+        for i in range(self.cfg["dense_kicks"]):
+            if self.late():
                 break
-            base = pool.top(2)[i % 2 if len(pool.items) > 1 else 0][1]
-            run(dense, _dense_kick(rng, base, free, dense.knn, m,
-                                   int(rng.integers(2, max(3, free.size // 10) + 1))))
-    return pool.result(time.perf_counter() - t_start)
+            base = self.pool.top(2)[i % 2 if len(self.pool.items) > 1 else 0][1]
+            self.run_all(dense, [_dense_kick(rng, base, free, dense.knn, D.shape[0],
+                                             int(rng.integers(2, max(3, free.size // 10) + 1)))])
