@@ -278,8 +278,11 @@ def _iter_dask(client, tasks):
                     yield i, fut.result(), None
                 elif fut.status == "cancelled":
                     yield i, None, WorkerDied("the Dask scheduler cancelled this task")
-                else:
+                elif fut.status == "error":
                     yield i, None, fut.exception()
+                else:  # finished, then its result was lost with a dying worker: Dask computes it again
+                    remaining.add(fut)
+                    continue
                 fut.release()
     finally:
         for fut in remaining:
