@@ -44,7 +44,8 @@ def evaluate_code(dataset: Path, out: Path, a) -> str:
     return (f"import shapecond as sc\nfrom shapecond.evaluation.report import write_report\n"
             f"ev = sc.evaluate({str(dataset)!r}, classes={classes!r}, methods={tuple(a.methods.split(','))!r}, "
             f"matchers={tuple(a.matchers.split(','))!r}, counts={tuple(int(c) for c in a.counts.split(','))!r}, "
-            f"n_jobs={a.jobs}, n_points={a.points}, max_targets={a.max_targets!r}, force=True)\nwrite_report(ev, {str(out)!r})\n")
+            f"n_jobs={a.jobs}, n_points={a.points}, max_targets={a.max_targets!r}, force=True"
+            + (", error_bars=False" if a.no_bars else "") + ")\nwrite_report(ev, {str(out)!r})\n")
 
 
 def peer_task(cls_dir: str, target: str, sets: dict, counts: list) -> list:
@@ -129,7 +130,38 @@ def summarise(results: dict, peer: list, timing: dict) -> str:
              "true vertex / sqrt(target area), **× 10⁻³**, mean over the targets of each class.", ""]
     lines += _table(allc, classes, st, matchers)
     lines += _checks(allc, recs, peer, classes, st)
+    lines += _bars(recs, st)
     return "\n".join(lines)
+
+
+def _bars(recs, st) -> list:
+    """The error bars' calibration (``evaluation.report.bar_calibration``) per matcher, when recorded."""
+    from types import SimpleNamespace
+
+    from shapecond.evaluation.report import bar_calibration
+
+    rows = [SimpleNamespace(**{**r, "bar": _num(r.get("bar")), "error_area": _num(r.get("error_area"))}) for r in recs]
+    if not any(math.isfinite(r.bar) for r in rows):
+        return []
+    out = ["", "Error bars without ground truth (δ(2ε̂) on the null shape with the landmarks, ε̂ the map's own RMS "
+           "distortion; bar and error in sqrt(area)): held = share of matchings whose error is at most their bar "
+           "(target ≥ 0.9), ratio = median bar / error (target ≤ 5), ρ = Spearman between bar and error, pooled "
+           "and the mean within classes (targets ≥ 0.6 and ≥ 0.4).", "",
+           "| matcher | matchings | held | median bar / error | ρ pooled | ρ within class | median ε̂ | median bar |",
+           "|---|---|---|---|---|---|---|---|"]
+    for m in st["matchers"]:
+        mine = [r for r in rows if r.matcher == m]
+        b = bar_calibration(mine)
+        eps = [r.epsilon_hat for r in mine if r.epsilon_hat is not None]
+        bars = [r.bar for r in mine if math.isfinite(r.bar)]
+        out.append(f"| {m} | {b['n']} | {b['held']:.2f} | {b['median_ratio']:.2f} | {b['rho']:.2f} | "
+                   f"{b['within_class']:.2f} | {_f(float(np.median(eps)) if eps else None)} | "
+                   f"{_f(float(np.median(bars)) if bars else None)} |")
+    return out + ["", "(ε̂ and bar columns × 10⁻³.)"]
+
+
+def _num(v) -> float:
+    return math.nan if v is None or isinstance(v, str) else float(v)
 
 
 def _counts(st, cls):
@@ -202,6 +234,8 @@ def main(argv=None) -> None:
     ap.add_argument("--out", type=Path, default=OUT / "remeshed")
     ap.add_argument("--from", dest="from_dir", type=Path, default=None)
     ap.add_argument("--no-peer", action="store_true")
+    ap.add_argument("--no-bars", action="store_true", help="no error bars (a δ search per matching)")
+    ap.add_argument("--section", default="remeshed", help="RESULTS.md section to write (a partial run: another name)")
     a = ap.parse_args(argv)
     out = a.from_dir or a.out
     if a.from_dir is None:
@@ -218,8 +252,8 @@ def main(argv=None) -> None:
     bench = json.loads((out / "bench.json").read_text())
     results = json.loads((out / "results.json").read_text())
     text = summarise(results, bench["peer"], bench["timing"])
-    write_section("remeshed", "## Figure 7 on remeshed TOSCA: dense maps between differently meshed shapes "
-                  "(bench_remeshed.py)\n\n" + text)
+    write_section(a.section, "## Figure 7 on remeshed TOSCA: dense maps between differently meshed shapes "
+                  f"(bench_remeshed.py{'' if a.section == 'remeshed' else ', ' + a.section})\n\n" + text)
     print(text)
 
 

@@ -81,6 +81,9 @@ def _counts(text) -> list[int]:
 @click.option("--scheduler", default=None,
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
                    "LocalCluster with W workers.")
+@click.option("--error-bars/--no-error-bars", default=True, show_default=True,
+              help="Give every matching its error bar δ(2ε̂) read off the map itself (one δ search each) and "
+                   "report how the bars hold the true errors.")
 @force_option
 @json_option
 def command(dataset_dir, **o):
@@ -96,7 +99,7 @@ def command(dataset_dir, **o):
         ev = evaluate(Path(dataset_dir), **lists, dense=o["dense"], n_jobs=o["jobs"], scheduler=run.client, quick=o["quick"],
                       n_points=o["points"], seed=o["seed"], backend=o["geodesic_backend"], cache=not o["no_cache"],
                       progress=progress_enabled(), max_targets=o["max_targets"], protocol=o["protocol"],
-                      force=o["force"])
+                      force=o["force"], error_bars=o["error_bars"])
     report = write_report(ev, o["out_dir"])
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),

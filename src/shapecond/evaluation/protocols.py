@@ -71,12 +71,14 @@ class MatchingSetup:
         sample matchers only.
     dense : how maps reach every vertex (``matching.pipeline.DENSE_STAGES``).
     shape : ShapeSetup (N, seed, backend, cache).
+    error_bars : give every matching its error bar (``matching.error_bar``; a δ search each).
     """
 
     counts: tuple
     matchers: tuple
     dense: str = "zoomout"
     shape: ShapeSetup = ShapeSetup()
+    error_bars: bool = True
 
     def options(self, matcher: str) -> MatchOptions:
         s = self.shape
@@ -133,9 +135,9 @@ def _shared_order(cls, target_path, landmark_sets, setup, protocol, load) -> lis
         lm = landmark_sets[method][:c]
         t0 = time.perf_counter()
         if protocol == "corresponding":
-            raw, raw_s, extra = _corresponding_cell(source, g, lm, matcher, solvers, s.seed)
+            raw, raw_s, extra = _corresponding_cell(source, g, lm, matcher, solvers, s.seed, setup.error_bars)
         else:
-            raw, raw_s, extra = _independent_cell(source, tgt, lm, setup.options(matcher), solvers)
+            raw, raw_s, extra = _independent_cell(source, tgt, lm, setup.options(matcher), solvers, setup.error_bars)
         err = normalise(raw, 2 * half)
         out.append(MatchRecord(
             cls.name, g.name, method, c, matcher, float(err.mean()),
@@ -145,14 +147,15 @@ def _shared_order(cls, target_path, landmark_sets, setup, protocol, load) -> lis
     return out
 
 
-def _corresponding_cell(source, g, lm, matcher, solvers, seed):
+def _corresponding_cell(source, g, lm, matcher, solvers, seed, bars: bool = True):
     src, ls = insert_landmarks(source, lm, solvers[0])
     carried, truth = carry_samples(src, g, solvers[1], seed)
     sm = match_samples(src.D, carried.D, ls, truth[ls], matcher, seed=seed)
     raw = errors_from_rows(carried.rows[truth], carried.samples[sm.t])
     eps_hat = float(np.linalg.norm(src.D - carried.D[np.ix_(sm.t, sm.t)]) / src.n_samples)  # the map's own
-    extra = {"exact": float(np.mean(sm.t == truth)), "epsilon_hat": eps_hat,
-             "bar": error_bar(src, len(ls), eps_hat, seed).delta}
+    extra = {"exact": float(np.mean(sm.t == truth)), "epsilon_hat": eps_hat}
+    if bars:
+        extra["bar"] = error_bar(src, len(ls), eps_hat, seed).delta
     if sm.candidates is not None:
         extra["recall"] = recall(sm.candidates, truth)
     if "h" in sm.info:
@@ -161,7 +164,7 @@ def _corresponding_cell(source, g, lm, matcher, solvers, seed):
     return raw, raw, extra
 
 
-def _independent_cell(source, tgt, lm, options: MatchOptions, solvers):
+def _independent_cell(source, tgt, lm, options: MatchOptions, solvers, bars: bool = True):
     if options.matcher in SAMPLE_MATCHERS:
         m = match_surfaces(source, tgt, lm, lm, options, solvers)
         raw_s = errors_from_rows(m.target.rows[m.sample_map.t], m.source.samples)
@@ -170,7 +173,7 @@ def _independent_cell(source, tgt, lm, options: MatchOptions, solvers):
         raw_s = None
     # evaluation points: the target's own samples (same ids on the source)
     return (errors_from_rows(tgt.rows, m.vertex_map[tgt.samples]), raw_s,
-            bar_fields(m, source, tgt.geometry, lm, solvers, options.seed))
+            bar_fields(m, source, tgt.geometry, lm, solvers, options.seed) if bars else {})
 
 
 def bar_fields(m, source, target_geometry, landmarks, solvers, seed) -> dict:
@@ -271,7 +274,7 @@ def _remeshed(cls, target_path, landmark_sets, setup: MatchingSetup, load) -> li
         else:
             m = match_landmarks_only(null, g, ls, lt, setup.options(matcher), solvers)
         maps[cell], seconds[cell] = m.vertex_map[ref_s], time.perf_counter() - t0
-        bars[cell] = bar_fields(m, src, g, ls, solvers, s.seed)
+        bars[cell] = bar_fields(m, src, g, ls, solvers, s.seed) if setup.error_bars else {}
     sym = reference_symmetry(cls, ref_t.size)
     raw, diameter, mirror = reference_errors(g, ref_t, maps, s.backend, sym)
     unit = surface_unit(g, diameter)

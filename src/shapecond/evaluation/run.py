@@ -53,6 +53,7 @@ class EvaluationOptions:
     max_targets : at most this many targets per class.
     progress : progress bars on stderr.
     force : run even when the estimate is beyond ``shapecond.limits``.
+    error_bars : give every matching its error bar δ(2ε̂) (``matching.error_bar``; one δ search each).
     """
 
     classes: tuple | None = None
@@ -71,6 +72,7 @@ class EvaluationOptions:
     max_targets: int | None = None
     progress: bool = False
     force: bool = False
+    error_bars: bool = True
 
     def __post_init__(self):
         from ..matching.pipeline import DENSE_STAGES, MATCHERS
@@ -211,7 +213,7 @@ def _matching_phase(plan: dict, landmarks: list, opts: EvaluationOptions):
             tasks.append((class_scale_task, (p.name, p.folder.null, p.targets, sets, setup), {}))
         sets = {d["method"]: d["vertices"] for d in done}
         counts = tuple(sorted({min(c, p.k) for c in opts.counts} | {p.k}))
-        ms = MatchingSetup(counts, tuple(opts.matchers), opts.dense, setup)
+        ms = MatchingSetup(counts, tuple(opts.matchers), opts.dense, setup, opts.error_bars)
         tasks += [(target_task, (p.folder, t, {m: sets[m] for m in opts.methods}, ms), dict(protocol=prot))
                   for t in p.targets for prot in p.protocols]
     records, eps, by_set = [], {}, {(d["cls"], d["method"]): d for d in landmarks}
