@@ -181,7 +181,7 @@ def test_cnbs_options_reach_every_heat_map_and_keywords_are_the_same_call():
     from shapecond.errors import InputError
     from shapecond.selection.cnbs import CNBSOptions
 
-    D = near_symmetric(24, 5)
+    D = mirror_pairs_instance(24, 5)
     a = cnbs_landmarks(D, 24, 2, seed=1, effort="quick", n_kicks=2, n_cross=4, max_verify=1)
     b = cnbs_landmarks(D, 24, 2, options=CNBSOptions(seed=1, effort="quick", n_kicks=2, n_cross=4, max_verify=1))
     assert a["landmarks"] == b["landmarks"] and a["scores"] == b["scores"]
