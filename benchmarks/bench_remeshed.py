@@ -45,7 +45,7 @@ def evaluate_code(dataset: Path, out: Path, a) -> str:
             f"ev = sc.evaluate({str(dataset)!r}, classes={classes!r}, methods={tuple(a.methods.split(','))!r}, "
             f"matchers={tuple(a.matchers.split(','))!r}, counts={tuple(int(c) for c in a.counts.split(','))!r}, "
             f"n_jobs={a.jobs}, n_points={a.points}, max_targets={a.max_targets!r}, force=True"
-            + (", error_bars=False" if a.no_bars else "") + ")\nwrite_report(ev, {str(out)!r})\n")
+            f"{', error_bars=False' if a.no_bars else ''})\nwrite_report(ev, {str(out)!r})\n")
 
 
 def peer_task(cls_dir: str, target: str, sets: dict, counts: list) -> list:

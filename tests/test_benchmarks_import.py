@@ -142,3 +142,21 @@ def test_a_stale_name_is_found():
                                                         "line 3: m._cache_path (_cache_path missing)"]
     with pytest.raises(ImportError):
         _bindings(ast.parse("from shapecond.shapes.metric import _cache_path\n"))
+
+
+@pytest.mark.parametrize("no_bars", [False, True])
+def test_the_remeshed_benchmarks_evaluate_code_runs_as_python(isolated, no_bars):
+    """The code bench_remeshed hands a fresh interpreter parses, and every keyword it passes to
+    ``sc.evaluate`` is one of its options (a wrong one was found only after an hour's run)."""
+    import argparse
+    import dataclasses
+
+    from shapecond.evaluation.run import EvaluationOptions
+    bench = importlib.import_module("bench_remeshed")
+    a = argparse.Namespace(classes="cat,dog", methods="fps,cnbs-scale", matchers="lh05", counts="3,6",
+                           jobs=1, points=400, max_targets=2, no_bars=no_bars)
+    tree = ast.parse(bench.evaluate_code(Path("/data"), Path("/out"), a))
+    call = next(n for n in ast.walk(tree) if isinstance(n, ast.Call) and getattr(n.func, "attr", "") == "evaluate")
+    accepted = {f.name for f in dataclasses.fields(EvaluationOptions)}
+    assert {k.arg for k in call.keywords} <= accepted
+    assert ("error_bars" in {k.arg for k in call.keywords}) == no_bars
