@@ -387,16 +387,16 @@ def _root(tree):
 def _open_parts(tree, stack, work):
     """Gather the node's unassigned samples into ``work.U`` and unused targets into ``work.R``;
     returns their counts (k, m)."""
-    t, used = stack.t, stack.used
+    t, used, U, R = stack.t, stack.used, work.U, work.R
     k = 0
     for x in tree.free:
         if t[x] < 0:
-            work.U[k] = x
+            U[k] = x
             k += 1
     m = 0
     for y in tree.targets:
         if not used[y]:
-            work.R[m] = y
+            R[m] = y
             m += 1
     return k, m
 
@@ -406,7 +406,8 @@ def _branch(tree, stack, work, depth, k, m, const, clock):
     """Choose the sample to branch on and list its children (module docstring): first fail on the
     row-max estimate, ties to distinctive rows; a child ``T u = y`` is kept when the bound with
     it forced stays above ``tol``.  False when the clock ran out (large nodes only)."""
-    P, Pr, alive, rowmax, U = work.P, work.Pr, work.alive, work.rowmax, work.U
+    P, Pr, alive, rowmax, U, R = work.P, work.Pr, work.alive, work.rowmax, work.U, work.R
+    spread, order, col, kids, nkids, tol = work.spread, work.order, work.col, stack.kids, stack.nkids, tree.tol
     total = 0.0
     for a in range(k):
         rowmax[a] = P[a, :m].max()
@@ -415,15 +416,15 @@ def _branch(tree, stack, work, depth, k, m, const, clock):
     for a in range(k):
         cnt = 0
         for b in range(m):
-            alive[a, b] = const + total - rowmax[a] + P[a, b] > tree.tol
+            alive[a, b] = const + total - rowmax[a] + P[a, b] > tol
             cnt += alive[a, b]
-        c = cnt - 0.5 * work.spread[U[a]]
+        c = cnt - 0.5 * spread[U[a]]
         if c < best_c:
             best_c, best_i = c, a
     stack.u_at[depth] = U[best_i]
-    work.order[:m] = np.argsort(-P[best_i, :m])
+    order[:m] = np.argsort(-P[best_i, :m])
     for q in range(m):
-        b = work.order[q]
+        b = order[q]
         if not alive[best_i, b]:
             continue
         if clock[2] == 1 and _late(clock):  # large nodes: one LAP per child
@@ -439,10 +440,10 @@ def _branch(tree, stack, work, depth, k, m, const, clock):
                         Pr[ra, cb] = P[a, bb]
                         cb += 1
                 ra += 1
-            if const + P[best_i, b] + _lap_max(Pr, k - 1, m - 1, work.col) <= tree.tol:
+            if const + P[best_i, b] + _lap_max(Pr, k - 1, m - 1, col) <= tol:
                 continue
-        stack.kids[depth, stack.nkids[depth]] = work.R[b]
-        stack.nkids[depth] += 1
+        kids[depth, nkids[depth]] = R[b]
+        nkids[depth] += 1
     return True
 
 
@@ -468,10 +469,10 @@ def _visit(tree, stack, work, depth, best_r, best_t, clock):
     lap = _lap_max(work.P, k, m, work.col)
     if clock[2] == 1 and _late(clock):  # a large node's bound takes seconds
         return 1, best_r, best_t
-    cand = work.cand
+    cand, col = work.cand, work.col
     cand[:] = stack.t
     for a in range(k):
-        cand[U[a]] = R[work.col[a]]
+        cand[U[a]] = R[col[a]]
     r = _map_ratio(D, n, cand, iso2)
     if r > best_r * (1.0 + 1e-12):  # primal candidate: the LAP completion
         best_r, best_t = r, cand.copy()
