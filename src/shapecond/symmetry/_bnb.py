@@ -351,7 +351,7 @@ def _profit(D, U, R, C1, s, As, Bs, P):
             P[a, b] = D[U[a], R[b]] ** 2 - s * (2.0 * C1[U[a], R[b]] + gl)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _root(tree):
     """The stack and the scratch arrays, with the landmarks assigned at the root."""
     D, n, L = tree.D, tree.n, tree.L
@@ -518,6 +518,7 @@ def _dfs(tree, best_r, best_t, budget):
     stride = max(1, min(256, (1 << 20) // max(1, nf * nf * tree.D.shape[0])))
     clock = (start, budget, stride)
     stack, work = _root(tree)
+    t, used, pos, nkids, u_at = stack.t, stack.used, stack.pos, stack.nkids, stack.u_at
     nodes = 0
     depth = 0
     enter = True
@@ -525,15 +526,15 @@ def _dfs(tree, best_r, best_t, budget):
         if enter:
             enter = False
             nodes += 1
-            stack.nkids[depth] = 0
-            stack.pos[depth] = 0
+            nkids[depth] = 0
+            pos[depth] = 0
             if nodes % stride == 1 % stride and _late(clock):
                 return best_r, best_t, False, nodes
             status, best_r, best_t = _visit(tree, stack, work, depth, best_r, best_t, clock)
             if status != 0:
                 return best_r, best_t, status == 2, nodes
         # move: into the next child, or back up
-        if stack.pos[depth] < stack.nkids[depth]:
+        if pos[depth] < nkids[depth]:
             _descend(tree, stack, depth)
             depth += 1
             enter = True
@@ -541,8 +542,8 @@ def _dfs(tree, best_r, best_t, budget):
             if depth == 0:
                 break
             depth -= 1
-            if stack.pos[depth] >= stack.nkids[depth]:  # the parent is done too: undo its assignment
-                u = stack.u_at[depth]
-                stack.used[stack.t[u]] = False
-                stack.t[u] = -1
+            if pos[depth] >= nkids[depth]:  # the parent is done too: undo its assignment
+                u = u_at[depth]
+                used[t[u]] = False
+                t[u] = -1
     return best_r, best_t, True, nodes
