@@ -351,7 +351,7 @@ def _profit(D, U, R, C1, s, As, Bs, P):
             P[a, b] = D[U[a], R[b]] ** 2 - s * (2.0 * C1[U[a], R[b]] + gl)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _root(tree):
     """The stack and the scratch arrays, with the landmarks assigned at the root."""
     D, n, L = tree.D, tree.n, tree.L
@@ -387,16 +387,16 @@ def _root(tree):
 def _open_parts(tree, stack, work):
     """Gather the node's unassigned samples into ``work.U`` and unused targets into ``work.R``;
     returns their counts (k, m)."""
-    t, used = stack.t, stack.used
+    t, used, U, R = stack.t, stack.used, work.U, work.R
     k = 0
     for x in tree.free:
         if t[x] < 0:
-            work.U[k] = x
+            U[k] = x
             k += 1
     m = 0
     for y in tree.targets:
         if not used[y]:
-            work.R[m] = y
+            R[m] = y
             m += 1
     return k, m
 
@@ -406,7 +406,8 @@ def _branch(tree, stack, work, depth, k, m, const, clock):
     """Choose the sample to branch on and list its children (module docstring): first fail on the
     row-max estimate, ties to distinctive rows; a child ``T u = y`` is kept when the bound with
     it forced stays above ``tol``.  False when the clock ran out (large nodes only)."""
-    P, Pr, alive, rowmax, U = work.P, work.Pr, work.alive, work.rowmax, work.U
+    P, Pr, alive, rowmax, U, R = work.P, work.Pr, work.alive, work.rowmax, work.U, work.R
+    spread, order, col, kids, nkids, tol = work.spread, work.order, work.col, stack.kids, stack.nkids, tree.tol
     total = 0.0
     for a in range(k):
         rowmax[a] = P[a, :m].max()
@@ -415,15 +416,15 @@ def _branch(tree, stack, work, depth, k, m, const, clock):
     for a in range(k):
         cnt = 0
         for b in range(m):
-            alive[a, b] = const + total - rowmax[a] + P[a, b] > tree.tol
+            alive[a, b] = const + total - rowmax[a] + P[a, b] > tol
             cnt += alive[a, b]
-        c = cnt - 0.5 * work.spread[U[a]]
+        c = cnt - 0.5 * spread[U[a]]
         if c < best_c:
             best_c, best_i = c, a
     stack.u_at[depth] = U[best_i]
-    work.order[:m] = np.argsort(-P[best_i, :m])
+    order[:m] = np.argsort(-P[best_i, :m])
     for q in range(m):
-        b = work.order[q]
+        b = order[q]
         if not alive[best_i, b]:
             continue
         if clock[2] == 1 and _late(clock):  # large nodes: one LAP per child
@@ -439,10 +440,10 @@ def _branch(tree, stack, work, depth, k, m, const, clock):
                         Pr[ra, cb] = P[a, bb]
                         cb += 1
                 ra += 1
-            if const + P[best_i, b] + _lap_max(Pr, k - 1, m - 1, work.col) <= tree.tol:
+            if const + P[best_i, b] + _lap_max(Pr, k - 1, m - 1, col) <= tol:
                 continue
-        stack.kids[depth, stack.nkids[depth]] = work.R[b]
-        stack.nkids[depth] += 1
+        kids[depth, nkids[depth]] = R[b]
+        nkids[depth] += 1
     return True
 
 
@@ -468,10 +469,10 @@ def _visit(tree, stack, work, depth, best_r, best_t, clock):
     lap = _lap_max(work.P, k, m, work.col)
     if clock[2] == 1 and _late(clock):  # a large node's bound takes seconds
         return 1, best_r, best_t
-    cand = work.cand
+    cand, col = work.cand, work.col
     cand[:] = stack.t
     for a in range(k):
-        cand[U[a]] = R[work.col[a]]
+        cand[U[a]] = R[col[a]]
     r = _map_ratio(D, n, cand, iso2)
     if r > best_r * (1.0 + 1e-12):  # primal candidate: the LAP completion
         best_r, best_t = r, cand.copy()
@@ -517,6 +518,7 @@ def _dfs(tree, best_r, best_t, budget):
     stride = max(1, min(256, (1 << 20) // max(1, nf * nf * tree.D.shape[0])))
     clock = (start, budget, stride)
     stack, work = _root(tree)
+    t, used, pos, nkids, u_at = stack.t, stack.used, stack.pos, stack.nkids, stack.u_at
     nodes = 0
     depth = 0
     enter = True
@@ -524,15 +526,15 @@ def _dfs(tree, best_r, best_t, budget):
         if enter:
             enter = False
             nodes += 1
-            stack.nkids[depth] = 0
-            stack.pos[depth] = 0
+            nkids[depth] = 0
+            pos[depth] = 0
             if nodes % stride == 1 % stride and _late(clock):
                 return best_r, best_t, False, nodes
             status, best_r, best_t = _visit(tree, stack, work, depth, best_r, best_t, clock)
             if status != 0:
                 return best_r, best_t, status == 2, nodes
         # move: into the next child, or back up
-        if stack.pos[depth] < stack.nkids[depth]:
+        if pos[depth] < nkids[depth]:
             _descend(tree, stack, depth)
             depth += 1
             enter = True
@@ -540,8 +542,8 @@ def _dfs(tree, best_r, best_t, budget):
             if depth == 0:
                 break
             depth -= 1
-            if stack.pos[depth] >= stack.nkids[depth]:  # the parent is done too: undo its assignment
-                u = stack.u_at[depth]
-                stack.used[stack.t[u]] = False
-                stack.t[u] = -1
+            if pos[depth] >= nkids[depth]:  # the parent is done too: undo its assignment
+                u = u_at[depth]
+                used[t[u]] = False
+                t[u] = -1
     return best_r, best_t, True, nodes
