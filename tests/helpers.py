@@ -17,7 +17,8 @@ Distance matrices (symmetric, zero diagonal, max 1; deterministic given a ``nump
     samples (near-symmetric when ``noise`` is given);
     ``mixed_instances(seed, count, n)``: a cycle over the kinds above;
     ``mirror_pairs_instance(n, seed, noise)``: mirror pairs and points on the plane, perturbed;
-    ``brute_sigma(D, n, landmarks)``: exact σ by enumeration; ``same(a, b)``: equal to 1e-9.
+    ``brute_sigma(D, n, landmarks)``: exact σ by enumeration; ``brute_delta(D, eps, landmarks)``:
+    exact δ(ε) by enumeration; ``same(a, b)``: equal to 1e-9.
 Batch tables
     ``read_table(path)`` (Parquet, CSV or JSON Lines), ``stable(rows)`` (without the
     ``VOLATILE`` columns, sorted by file), ``table_row(i, **columns)`` (a complete row).
@@ -157,6 +158,32 @@ def mirror_pairs_instance(n: int, seed: int, noise: float = 0.03, dim: int = 3) 
     P = np.vstack([half, mirror, plane]) + noise * rng.normal(size=(n, dim))
     D = np.linalg.norm(P[:, None] - P[None], axis=2)
     return D / D.max()
+
+
+def brute_delta(D, eps, landmarks=()):
+    """Exact δ(ε) by enumeration: the largest RMS displacement over the bijections fixing the
+    landmarks whose RMS distortion is at most ε and every landmark row's too (``symmetry.scale``)."""
+    import itertools
+    import math
+
+    from shapecond.symmetry import objective as obj
+    from shapecond.symmetry.scale import budget_of
+
+    n = D.shape[0]
+    lm = list(landmarks)
+    free = [x for x in range(n) if x not in lm]
+    budget = budget_of(eps, n, D)  # (εN)², at least the isometry round-off level
+    best = 0.0
+    for perm in itertools.permutations(free):
+        t = np.arange(n)
+        t[free] = perm
+        if obj.dist2(D, t) > budget:
+            continue
+        rows = obj.anchor_rows(D, t, lm)
+        if rows.size and rows.max() > budget / n:
+            continue
+        best = max(best, math.sqrt(obj.d2(D, t) / n))
+    return best
 
 
 def brute_sigma(D, n=None, landmarks=()):

@@ -1,6 +1,5 @@
 """The scale-aware score δ(ε) against enumeration of every map (N <= 8)."""
 
-import itertools
 import math
 
 import numpy as np
@@ -13,32 +12,13 @@ from shapecond.selection.cnbs import HeatMap, full_heat_map, heat_map
 from shapecond.shapes.metric import from_distance_matrix
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry.scale import budget_of, default_epsilon, resolution, scale_score
+from tests.helpers import brute_delta
 
 
 def _points(n, seed):
     p = np.random.default_rng(seed).uniform(size=(n, 2))
     D = cdist(p, p)
     return D / D.max()
-
-
-def exact_delta(D, eps, landmarks=()):
-    """max RMS displacement over the maps fixing the landmarks with RMS distortion <= eps
-    and every landmark row's RMS distortion <= eps (module docstring), by enumeration."""
-    n = D.shape[0]
-    lm = list(landmarks)
-    free = [x for x in range(n) if x not in lm]
-    best = 0.0
-    for perm in itertools.permutations(free):
-        t = np.arange(n)
-        t[free] = perm
-        budget = budget_of(eps, n, D)  # (εN)², at least the isometry round-off level
-        if obj.dist2(D, t) > budget:
-            continue
-        rows = obj.anchor_rows(D, t, lm)
-        if rows.size and rows.max() > budget / n:
-            continue
-        best = max(best, math.sqrt(obj.d2(D, t) / n))
-    return best
 
 
 @settings(max_examples=12, deadline=None)
@@ -52,7 +32,7 @@ def test_lower_bound_attained_and_exact_on_small_instances(seed, factor, n_landm
     assert math.sqrt(obj.d2(D, s.witness) / 7) == pytest.approx(s.displacement, abs=1e-12)
     assert s.distortion <= eps * (1 + 1e-9)
     assert all(s.witness[lm] == lm)
-    exact = exact_delta(D, eps, lm)
+    exact = brute_delta(D, eps, lm)
     assert s.displacement <= exact + 1e-12
     assert s.displacement == pytest.approx(exact, rel=1e-9, abs=1e-12)  # the search finds the optimum here
 
@@ -63,9 +43,9 @@ def test_lower_bound_attained_and_exact_on_small_instances(seed, factor, n_landm
 def test_monotone_in_epsilon_and_in_landmarks(seed):
     D = _points(7, seed)
     h = default_epsilon(D)
-    values = [exact_delta(D, f * h, [0]) for f in (0.5, 1, 2, 4)]
+    values = [brute_delta(D, f * h, [0]) for f in (0.5, 1, 2, 4)]
     assert values == sorted(values)
-    nested = [exact_delta(D, 2 * h, list(range(k))) for k in range(4)]
+    nested = [brute_delta(D, 2 * h, list(range(k))) for k in range(4)]
     assert nested == sorted(nested, reverse=True)
     est = [scale_score(D, landmarks=list(range(k)), epsilon=2 * h).displacement for k in range(4)]
     assert all(e <= v + 1e-12 for e, v in zip(est, nested))
@@ -82,7 +62,7 @@ def test_exact_symmetry_gives_its_full_displacement():
     for eps in (0.0, 0.01, 0.1):
         s = scale_score(D, epsilon=eps)
         assert s.displacement >= best_iso - 1e-12
-        assert s.displacement == pytest.approx(exact_delta(D, eps), abs=1e-12)
+        assert s.displacement == pytest.approx(brute_delta(D, eps), abs=1e-12)
     assert scale_score(D, epsilon=0.0).isometry
     # the centre is on every symmetry: fixing it changes nothing; fixing a vertex kills the rotations
     assert scale_score(D, landmarks=[6], epsilon=0.0).displacement == pytest.approx(best_iso, abs=1e-12)
@@ -97,7 +77,7 @@ def test_heat_map_with_a_budget_bounds_the_full_searches():
     free = np.arange(1, 8)
     # every value is sqrt(d²) of a feasible map: at most the exact optimum with p fixed
     for p in free:
-        exact = exact_delta(D, 2 * default_epsilon(D), [0, p]) * math.sqrt(8)
+        exact = brute_delta(D, 2 * default_epsilon(D), [0, p]) * math.sqrt(8)
         assert hm.values[p] <= exact + 1e-9 and full[p] <= exact + 1e-9
     # the choice is within the resolution of δ of the best full search, and the farthest
     # from the landmark among the heat map's candidates that close to its smallest value

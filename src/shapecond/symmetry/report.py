@@ -21,7 +21,7 @@ import numpy as np
 from shapecond.jsonable import fmt, jsonable
 from shapecond.symmetry.resolution import ResolutionReport, coarse_level, refine, resolution_for_shape
 from shapecond.symmetry.scale import ScaleScore, budget_of, describe, scale_score
-from shapecond.symmetry.score import SymmetryScore, symmetry_score
+from shapecond.symmetry.score import ScoreOptions, SymmetryScore, symmetry_score
 from shapecond.symmetry.verdict import verdict
 
 
@@ -98,25 +98,15 @@ def _scale(D, n, lm, epsilon, seed, effort, sc) -> ScaleScore:
 
 
 @dataclass(frozen=True)
-class ScoreSettings:
-    """How ``score_report`` scores a shape.
+class ScoreSettings(ScoreOptions):
+    """How ``score_report`` scores a shape: ``score.ScoreOptions`` (how σ is bracketed: exact,
+    upper, time_limit, seed, effort, force) and the level of δ(ε).
 
     Attributes
     ----------
-    exact : "auto" (exact σ when enumeration is quick), True or False (``score.symmetry_score``).
-    upper : LP upper bound when σ is not exact (``relax``).
-    time_limit : seconds for each of the exact and LP solves.
-    seed, effort : of the witness searches.
-    force : run work beyond ``shapecond.limits``.
     epsilon : distortion level of δ(ε) (None: ``scale.default_epsilon``, the median sample spacing).
     """
 
-    exact: object = "auto"
-    upper: bool = False
-    time_limit: float | None = 10.0
-    seed: int = 0
-    effort: str = "default"
-    force: bool = False
     epsilon: float | None = None
 
 
@@ -127,8 +117,7 @@ def score_report(shape, landmark_ids=(), settings: ScoreSettings = ScoreSettings
     """
     s = settings
     lm = shape.landmark_indices(landmark_ids) if len(landmark_ids) else np.zeros(0, dtype=np.int64)
-    sc = symmetry_score(shape.D, shape.n_points, lm, exact=s.exact, upper=s.upper, time_limit=s.time_limit,
-                        seed=s.seed, effort=s.effort, force=s.force, search=search)
+    sc = symmetry_score(shape.D, shape.n_points, lm, search=search, options=s)
     res = resolution_for_shape(shape, lm, seed=s.seed, effort=s.effort, score=sc)
     delta = _scale(shape.D, shape.n_points, lm, s.epsilon, s.seed, s.effort, sc)
     return ScoreReport(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta),
