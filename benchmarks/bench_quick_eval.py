@@ -73,11 +73,12 @@ def main() -> None:
     sha, src = baseline_src(a.baseline or git("merge-base", "HEAD", "main"))
     rows = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for which, path in (("baseline", src), ("ours", None)):
-            cache, out = Path(tmp) / f"cache-{which}", Path(tmp) / f"out-{which}"
+        variants = (("baseline", src, []), ("ours", None, []), ("ours, --no-error-bars", None, ["--no-error-bars"]))
+        for i, (which, path, extra) in enumerate(variants):
+            cache, out = Path(tmp) / f"cache-{i}", Path(tmp) / f"out-{which}"
             run_variant(CLI.format(args=["score", "demo:animal", "--points", "24", "--json"]), path,
                         Path(tmp) / "warm-up")
-            args = ["evaluate", str(a.dataset), "--quick", "--jobs", str(a.jobs), "--out", str(out)]
+            args = ["evaluate", str(a.dataset), "--quick", "--jobs", str(a.jobs), "--out", str(out), *extra]
             for run in ("cold", "warm"):
                 rows[(which, run)] = run_variant(CLI.format(args=args), path, cache)
                 print(which, run, f"{rows[(which, run)]['wall']:.1f} s", flush=True)
@@ -87,9 +88,10 @@ def main() -> None:
              f"this tree, in the same run; each figure one fresh process (`--quick`: wolf and centaur, 2 targets "
              f"each, N = 200, every landmark method, LH05 and FAQ, `--jobs {a.jobs}`), cold = empty cache, warm = "
              "the same cache again. CPU = the whole process tree's, loky's worker processes included. "
-             "Target (issue 16): cold ≤ 30 s.", "",
+             "Target (issue 16): cold ≤ 30 s. `--no-error-bars`: without the error bar of every matching "
+             "(a δ search each; the baseline had none).", "",
              "| variant | cold wall s (CPU s) | warm wall s (CPU s) | load before (cold / warm) |", "|---|---|---|---|"]
-    for which in ("baseline", "ours"):
+    for which, _, _ in variants:
         c, w = rows[(which, "cold")], rows[(which, "warm")]
         lines.append(f"| {which} | {c['wall']:.1f} ({c['tree_cpu']:.1f}) | {w['wall']:.1f} ({w['tree_cpu']:.1f}) | "
                      f"{c['load']:.2f} / {w['load']:.2f} |")
