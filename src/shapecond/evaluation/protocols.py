@@ -44,7 +44,7 @@ from ..errors import InputError
 from ..matching import refine
 from ..matching.candidates import recall
 from ..matching.metrics import errors_from_rows, normalise
-from ..matching.error_bar import dense_error_bar, error_bar
+from ..matching.error_bar import dense_error_bar, error_bar, rms_distortion
 from ..matching.pipeline import (SAMPLE_MATCHERS, MatchOptions, match_landmarks_only, match_samples,
                                  match_surfaces)
 from ..matching.sampled import (CachedSolver, carry_samples, insert_landmarks, sample_surface, surface_at,
@@ -152,7 +152,7 @@ def _corresponding_cell(source, g, lm, matcher, solvers, seed, bars: bool = True
     carried, truth = carry_samples(src, g, solvers[1], seed)
     sm = match_samples(src.D, carried.D, ls, truth[ls], matcher, seed=seed)
     raw = errors_from_rows(carried.rows[truth], carried.samples[sm.t])
-    eps_hat = float(np.linalg.norm(src.D - carried.D[np.ix_(sm.t, sm.t)]) / src.n_samples)  # the map's own
+    eps_hat = rms_distortion(src.D, carried.D[np.ix_(sm.t, sm.t)])  # the found map's own distortion
     extra = {"exact": float(np.mean(sm.t == truth)), "epsilon_hat": eps_hat}
     if bars:
         extra["bar"] = error_bar(src, len(ls), eps_hat, seed).delta
@@ -205,10 +205,11 @@ def landmark_images(landmarks, ref_source, ref_target, solver) -> np.ndarray:
         j = first.get(v)
         if j is None or int(ref_target[j]) in out:
             d = solver.distances([v])[0][ref_source]
-            j = next(int(i) for i in np.argsort(d, kind="stable") if int(ref_target[i]) not in out)
+            j = next((int(i) for i in np.argsort(d, kind="stable") if int(ref_target[i]) not in out), None)
+        if j is None:
+            raise InputError(f"{len(out) + 1} landmarks need as many distinct target vertices among the "
+                             "reference points")
         out.append(int(ref_target[j]))
-    if len(set(out)) != len(out):  # pragma: no cover - the loop above keeps them distinct
-        raise InputError("two landmarks of the null shape fall on one target vertex through the ground truth")
     return np.asarray(out, dtype=np.int64)
 
 
@@ -260,7 +261,8 @@ def _remeshed(cls, target_path, landmark_sets, setup: MatchingSetup, load) -> li
         raise InputError(f"{cls.name}: {cls.null.stem} has {ref_s.size} reference points but {g.name} has "
                          f"{ref_t.size}")
     sampled = any(m in SAMPLE_MATCHERS for m in setup.matchers)
-    src = sample_surface(null, s.n_points, s.backend, s.seed, cache=s.cache)  # also the error bars' samples
+    # the sample matchers' samples, and those of the error bars
+    src = sample_surface(null, s.n_points, s.backend, s.seed, cache=s.cache) if sampled or setup.error_bars else None
     tgt = sample_surface(g, s.n_points, s.backend, s.seed, cache=s.cache) if sampled else None
     solvers = (CachedSolver(null, s.backend, src), CachedSolver(g, s.backend, tgt))
     images = {m: landmark_images(lm, ref_s, ref_t, solvers[0]) for m, lm in landmark_sets.items()}

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -89,6 +89,12 @@ class ErrorBar:
                 f"({100 * self.delta_diameter:.3g} % of the diameter)")
 
 
+def rms_distortion(D_source, D_images) -> float:
+    """ε̂ = ||D_s − D_t[T̂, T̂]||_F / N: the RMS distortion of a map of N samples (module docstring),
+    from the source's distances and the target's distances between the images of the samples."""
+    return float(np.linalg.norm(np.asarray(D_source) - np.asarray(D_images)) / D_source.shape[0])
+
+
 def map_distortion(source: SampledSurface, target_geometry, images, solver=None) -> float:
     """RMS distortion ε̂ of the map sending the samples of ``source`` to the target vertices ``images``.
 
@@ -110,7 +116,7 @@ def map_distortion(source: SampledSurface, target_geometry, images, solver=None)
     rows = (solver if solver is not None else CachedSolver(target_geometry, source.backend)).distances(uniq)
     Dt = rows[:, uniq].astype(np.float64)[np.ix_(inv, inv)]
     Dt = 0.5 * (Dt + Dt.T) / surface_unit(target_geometry, float(rows.max()))
-    return float(np.linalg.norm(source.D - Dt) / source.n_samples)
+    return rms_distortion(source.D, Dt)
 
 
 def error_bar(source: SampledSurface, n_landmarks: int, epsilon_hat: float, seed: int = 0,
@@ -157,7 +163,5 @@ def dense_error_bar(source: SampledSurface, target_geometry, vertex_map, n_landm
     """
     t0 = time.perf_counter()
     eps_hat = map_distortion(source, target_geometry, np.asarray(vertex_map)[source.samples], solver)
-    bar = error_bar(source, n_landmarks, eps_hat, seed)
-    bar = ErrorBar(bar.epsilon_hat, bar.epsilon, bar.delta, bar.delta_diameter, bar.moved, bar.doubt, bar.doubt_ids,
-                   time.perf_counter() - t0)
+    bar = replace(error_bar(source, n_landmarks, eps_hat, seed), seconds=time.perf_counter() - t0)
     return bar, bar.doubt[source.nearest]

@@ -324,9 +324,10 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
     t_start = time.perf_counter()
     if effort not in EFFORTS:
         raise InputError(f"effort must be one of {sorted(EFFORTS)}, got {effort!r}")
-    D, n, lm, free = prepare_instance(D, n_samples, landmarks)
+    instance = prepare_instance(D, n_samples, landmarks)
+    D, n, lm, free = instance
     deadline = math.inf if time_limit is None else t_start + float(time_limit)
-    run = _SearchRun(D, n, lm, free, EFFORTS[effort], budget, np.random.default_rng(seed), deadline)
+    run = _SearchRun(instance, EFFORTS[effort], budget, np.random.default_rng(seed), deadline)
     warm = [S.repair(t, n, D.shape[0], lm) for t in starts]
     s_swap = run.single_swap()
     run.run_all(run.bij, [t for t in warm if t.max() < n])
@@ -345,9 +346,11 @@ class _SearchRun:
     """One run of ``witness_search``: the pool of maps found, the search stages over X (``bij``)
     and, with dense targets, over Y (``dense``), the random generator and the clock.  Each
     method is one family of starts of the module docstring, in the order they run; every start
-    is polished and its local optimum added to the pool until ``late()``."""
+    is polished and its local optimum added to the pool until ``late()``.  ``instance`` is
+    ``prepare_instance``'s (D, n, landmarks, free samples)."""
 
-    def __init__(self, D, n, lm, free, cfg, budget, rng, deadline):
+    def __init__(self, instance, cfg, budget, rng, deadline):
+        D, n, lm, free = instance
         self.D, self.n, self.lm, self.free, self.cfg, self.budget = D, n, lm, free, cfg, budget
         self.rng, self.deadline = rng, deadline
         self.pool = MapPool(D, n, budget, lm)
