@@ -105,3 +105,24 @@ def test_same_ids_samples_report_the_sample_error(files, capsys, matcher):
                        "--landmarks-target", ls, "--samples", "same-ids", "--points", 60, "-o", d / "x.txt")
     assert code == 2 and "do not share their vertex ids" in err and err.count("\n") == 1
     assert not (d / "x.txt").exists()
+
+
+def test_the_error_bar_is_in_the_summary_and_its_doubt_field_in_a_ply(files, capsys):
+    d, V, inv = files
+    ls = [0, 20, 21 * 14 + 6]
+    code, out, err = run(capsys, "match", d / "src.off", d / "tgt.off",
+                         "--landmarks-source", ",".join(map(str, ls)),
+                         "--landmarks-target", ",".join(str(inv[v]) for v in ls),
+                         "--points", 80, "-o", d / "bar.txt", "--doubt-ply", d / "doubt.ply", "--json")
+    assert code == 0, err
+    bar = json.loads(out)["error_bar"]
+    assert bar["epsilon"] == bar["epsilon_hat"] >= 0 and bar["n_samples"] == 80
+    assert bar["bar"] >= bar["resolution"] > 0 and bar["unit"] == "sqrt(area)"
+    assert f"{bar['bar']:.3g}" in bar["text"]
+    import trimesh
+    ply = trimesh.load(d / "doubt.ply", process=False)
+    assert len(ply.vertices) == len(V)
+    code, out, err = run(capsys, "match", d / "src.off", d / "tgt.off", "--landmarks-source", "0,20,300",
+                         "--landmarks-target", "0,20,300", "--points", 80, "-o", d / "nobar.txt", "--no-error-bar",
+                         "--json")
+    assert code == 0 and "error_bar" not in json.loads(out)

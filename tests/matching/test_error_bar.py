@@ -8,11 +8,13 @@ import pytest
 from scipy.spatial.distance import cdist
 
 from shapecond.errors import InputError
-from shapecond.matching.error_bar import TRIANGLE_FACTOR, dense_error_bar, error_bar, map_distortion
+from shapecond.matching import error_bar as eb
+from shapecond.matching.error_bar import (bar_surface, dense_error_bar, error_bar, map_distortion,
+                                         sample_map_bar)
 from shapecond.matching.sampled import sample_surface
 from shapecond.shapes.synthetic import bumpy_blob
 from shapecond.symmetry import objective as obj
-from shapecond.symmetry.scale import scale_score
+from shapecond.symmetry.scale import resolution, scale_score
 from tests.helpers import brute_delta
 
 
@@ -52,16 +54,20 @@ def test_map_distortion_is_zero_for_the_identity_and_grows_with_a_deformation():
     assert map_distortion(src, g, shuffled) > 1e-3
 
 
-def test_error_bar_is_delta_at_twice_the_level_with_its_witness():
+def test_error_bar_is_delta_at_the_maps_own_level_with_its_witness():
     g = bumpy_blob(subdivisions=3)
     src = sample_surface(g, 40, landmarks=[5, 60, 200], cache=False)
     bar = error_bar(src, 3, 0.05, seed=0)                  # about a third of the sample spacing (sqrt(area) units)
-    assert bar.epsilon == pytest.approx(TRIANGLE_FACTOR * 0.05)
-    ref = scale_score(src.D, 40, [0, 1, 2], TRIANGLE_FACTOR * 0.05, seed=0, effort="quick")
+    assert bar.epsilon == pytest.approx(0.05)          # the level the sentence states: the map's own distortion
+    ref = scale_score(src.D, 40, [0, 1, 2], 0.05, seed=0, effort="quick")
     assert bar.delta == pytest.approx(ref.displacement) and bar.delta > 0
     assert bar.delta_diameter == pytest.approx(bar.delta / src.D.max())
     assert bar.doubt.shape == (40,) and np.all(bar.doubt[:3] == 0)   # the landmarks do not move
     assert np.sqrt(np.mean(bar.doubt ** 2)) == pytest.approx(bar.delta)  # δ is the RMS of the doubt field
+    assert bar.bar == pytest.approx(max(np.mean(bar.doubt), bar.resolution))  # its mean, never below h / 2
+    assert bar.resolution == pytest.approx(resolution(src.D)) and 0 < bar.bar
+    assert bar.bar_diameter == pytest.approx(bar.bar / src.D.max()) and bar.n_samples == 40
+    assert "%.3g" % bar.bar in bar.sentence() and bar.to_dict()["bar"] == bar.bar
     assert set(bar.doubt_ids) <= set(g.ids[src.samples].tolist())
     with pytest.raises(InputError):
         error_bar(src, 3, float("nan"))
@@ -76,3 +82,27 @@ def test_the_right_map_of_a_shape_onto_itself_has_no_distortion_and_a_bar_at_del
     assert field.shape == (g.n_vertices,) and np.all(field >= 0)
     worse, _ = dense_error_bar(src, g, np.roll(np.arange(g.n_vertices), 7), 3)   # a scrambled map
     assert worse.epsilon_hat > bar.epsilon_hat and worse.delta >= bar.delta
+
+
+def test_the_bar_uses_the_first_samples_with_every_landmark_and_its_field_reaches_every_vertex(monkeypatch):
+    g = bumpy_blob(subdivisions=3)
+    src = sample_surface(g, 40, landmarks=[5, 60, 200], cache=False)
+    monkeypatch.setattr(eb, "BAR_SAMPLES", 12)
+    coarse = bar_surface(src, 3)
+    assert np.array_equal(coarse.samples, src.samples[:12]) and np.array_equal(coarse.rows, src.rows[:12])
+    assert bar_surface(src, 30).n_samples == 30             # never fewer samples than landmarks
+    bar, field = dense_error_bar(src, g, np.roll(np.arange(g.n_vertices), 7), 3)
+    assert bar.n_samples == 12 and bar.doubt.shape == (12,)
+    assert np.array_equal(field, bar.doubt[coarse.nearest])  # each vertex takes its nearest bar sample's doubt
+    assert bar.epsilon_hat == pytest.approx(map_distortion(coarse, g, np.roll(np.arange(g.n_vertices), 7)[coarse.samples]))
+
+
+def test_a_sample_map_bar_reads_the_distortion_of_its_own_samples():
+    g = bumpy_blob(subdivisions=3)
+    src = sample_surface(g, 40, landmarks=[5, 60, 200], cache=False)
+    right = sample_map_bar(src, src, np.arange(40), 3)
+    assert right.epsilon_hat == pytest.approx(0.0, abs=1e-9)
+    swapped = sample_map_bar(src, src, np.r_[0, 1, 2, 4, 3, 5:40], 3)
+    assert swapped.epsilon_hat == pytest.approx(eb.rms_distortion(src.D, src.D[np.ix_(np.r_[0, 1, 2, 4, 3, 5:40],
+                                                                                   np.r_[0, 1, 2, 4, 3, 5:40])]))
+    assert swapped.epsilon_hat > 0 and swapped.delta >= right.delta

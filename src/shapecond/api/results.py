@@ -241,7 +241,7 @@ class MatchResult(Pictures):
         bar = s.get("error_bar")
         return (f"MatchResult({s.get('matcher')}, {self.map.size} source ids -> target ids, "
                 f"{s.get('n_landmarks')} landmarks, N={s.get('n_points')}"
-                + (f", error bar {bar['delta']:.3g} sqrt(area))" if bar else ")"))
+                + (f", error bar {bar['bar']:.3g} sqrt(area))" if bar else ")"))
 
 
 __all__ = ["HeatMapResult", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult", "ScoreResult", "promote"]

@@ -82,7 +82,7 @@ def _counts(text) -> list[int]:
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
                    "LocalCluster with W workers.")
 @click.option("--error-bars/--no-error-bars", default=True, show_default=True,
-              help="Give every matching its error bar δ(2ε̂) read off the map itself (one δ search each) and "
+              help="Give every matching its error bar (from δ(ε̂)) read off the map itself (one δ search each) and "
                    "report how the bars hold the true errors.")
 @force_option
 @json_option

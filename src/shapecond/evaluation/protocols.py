@@ -44,7 +44,7 @@ from ..errors import InputError
 from ..matching import refine
 from ..matching.candidates import recall
 from ..matching.metrics import errors_from_rows, normalise
-from ..matching.error_bar import dense_error_bar, error_bar, rms_distortion
+from ..matching.error_bar import dense_error_bar, sample_map_bar
 from ..matching.pipeline import (SAMPLE_MATCHERS, MatchOptions, match_landmarks_only, match_samples,
                                  match_surfaces)
 from ..matching.sampled import (CachedSolver, carry_samples, insert_landmarks, sample_surface, surface_at,
@@ -152,10 +152,10 @@ def _corresponding_cell(source, g, lm, matcher, solvers, seed, bars: bool = True
     carried, truth = carry_samples(src, g, solvers[1], seed)
     sm = match_samples(src.D, carried.D, ls, truth[ls], matcher, seed=seed)
     raw = errors_from_rows(carried.rows[truth], carried.samples[sm.t])
-    eps_hat = rms_distortion(src.D, carried.D[np.ix_(sm.t, sm.t)])  # the found map's own distortion
-    extra = {"exact": float(np.mean(sm.t == truth)), "epsilon_hat": eps_hat}
+    extra = {"exact": float(np.mean(sm.t == truth))}
     if bars:
-        extra["bar"] = error_bar(src, len(ls), eps_hat, seed).delta
+        bar = sample_map_bar(src, carried, sm.t, len(ls), seed)
+        extra.update(epsilon_hat=bar.epsilon_hat, bar=bar.bar)
     if sm.candidates is not None:
         extra["recall"] = recall(sm.candidates, truth)
     if "h" in sm.info:
@@ -181,7 +181,7 @@ def bar_fields(m, source, target_geometry, landmarks, solvers, seed) -> dict:
     on the matcher's samples, or on ``source`` with the landmarks inserted first (the zoomout matcher)."""
     surface = m.source if m.source is not None else insert_landmarks(source, landmarks, solvers[0])[0]
     bar, _ = dense_error_bar(surface, target_geometry, m.vertex_map, len(landmarks), seed, solvers[1])
-    return {"epsilon_hat": bar.epsilon_hat, "bar": bar.delta}
+    return {"epsilon_hat": bar.epsilon_hat, "bar": bar.bar}
 
 
 # --- the remeshed protocol ------------------------------------------------------------------------

@@ -26,9 +26,10 @@ class MatchRecord:
     exact, recall, objective_ratio : corresponding protocol (module ``protocols``).
     flipped : remeshed protocol with a reference symmetry: 1.0 when the mean error exceeds half
         the mean distance between mirror images (a left–right flip), else 0.0; NaN otherwise.
-    epsilon_hat : RMS distortion of the map itself on the null shape's samples, sqrt(area) units
-        (``matching.error_bar``: read without ground truth).
-    bar : the map's error bar δ(2ε̂) in units of sqrt(area) (``matching.error_bar``).
+    epsilon_hat : RMS distortion of the map itself on the null shape's first samples, sqrt(area)
+        units (``matching.error_bar``: read without ground truth; NaN without error bars).
+    bar : the map's error bar in units of sqrt(area): the mean displacement of the witness of
+        δ(ε̂) (``matching.error_bar``), the statistic of ``error_area``.
     """
 
     cls: str

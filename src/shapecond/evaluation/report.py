@@ -194,8 +194,9 @@ def _error_sections(ev, protocol, scores) -> list[str]:
                     f"class/method/count cells): ρ = {_fmt(rho)}, p = {_fmt(p)}; within classes "
                     f"(mean of per-class ρ over {nw} classes): {_fmt(rw)}."]
     out += ["", f"## Error bars without ground truth, {protocol} protocol", "",
-            "Each matching's bar is δ(2ε̂) on the null shape with its landmarks, ε̂ the RMS distortion of the "
-            "map itself (`matching.error_bar`); both bar and error in units of sqrt(area). Held: the share of "
+            "Each matching's bar is the mean displacement of the witness of δ(ε̂) on the null shape with its "
+            "landmarks, ε̂ the RMS distortion of the map itself (`matching.error_bar`); both bar and mean error "
+            "in units of sqrt(area). Held: the share of "
             "matchings whose error is at most their bar; ratio: the median of bar / error; ρ: Spearman between "
             "bar and error over the matchings, pooled and within classes.", "",
             "| matcher | matchings | held | median bar / error | ρ pooled | ρ within class |", "|---|---|---|---|---|---|"]
@@ -308,7 +309,7 @@ def correlations(ev) -> dict:
 
 
 def bar_calibration(records) -> dict:
-    """How the error bars δ(2ε̂) hold the errors (both in units of sqrt(area)), over records with both.
+    """How the error bars (the mean displacement of δ(ε̂)'s witness) hold the errors (both in units of sqrt(area)), over records with both.
 
     ``held``: fraction of matchings whose error is at most their bar; ``median_ratio``: median of
     bar / error; ``rho``: Spearman's ρ between bar and error over the matchings, and

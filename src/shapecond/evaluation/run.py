@@ -53,7 +53,7 @@ class EvaluationOptions:
     max_targets : at most this many targets per class.
     progress : progress bars on stderr.
     force : run even when the estimate is beyond ``shapecond.limits``.
-    error_bars : give every matching its error bar δ(2ε̂) (``matching.error_bar``; one δ search each).
+    error_bars : give every matching its error bar (from δ(ε̂), ``matching.error_bar``; one δ search each).
     """
 
     classes: tuple | None = None
