@@ -59,13 +59,15 @@ def tables(data: dict):
            for d in data["landmarks"]}
     dlc = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d.get("scale_class", {}).items()}
            for d in data["landmarks"]}
+    dlh = {(d["cls"], d["method"]): {int(k): _num(v) for k, v in d.get("scale_hat", {}).items()}
+           for d in data["landmarks"]}
     acc = {}
     for r in data["records"]:
         key = (r.get("protocol", "independent"), r["cls"], r["method"], r["n_landmarks"], r["matcher"])
         for f in ("error", "exact", "recall", "objective_ratio", "seconds"):
             acc.setdefault(key, {}).setdefault(f, []).append(_num(r.get(f)))
     cells = {k: {f: _mean(v) for f, v in fs.items()} for k, fs in acc.items()}
-    return sig, dlt, dlc, cells
+    return sig, dlt, dlc, dlh, cells
 
 
 def _classes(st):
@@ -76,7 +78,7 @@ def summarise(data: dict, wall: float | None, peak: float | None = None) -> str:
     st = data["settings"]
     classes, methods, matchers = _classes(st), st["methods"], st["matchers"]
     prots = st.get("protocols", ["independent"])
-    sig, dlt, dlc, cells = tables(data)
+    sig, dlt, dlc, dlh, cells = tables(data)
     L = st["landmark_counts"]
     lines = ["## Figure 7 evaluation on TOSCA", "",
              f"Machine: {machine()}; load average at the end {os.getloadavg()[0]:.1f}. Command: "
@@ -91,10 +93,12 @@ def summarise(data: dict, wall: float | None, peak: float | None = None) -> str:
              "*corresponding*: the target is sampled at the null shape's sample vertices, the error of a "
              "sample is the geodesic distance from its image to its own vertex (the κ setting); "
              "*independent*: each target has its own FPS samples, the dense map is measured at them.", ""]
-    eps = st.get("class_epsilon") or {}
+    eps, eps_hat = st.get("class_epsilon") or {}, st.get("class_epsilon_hat") or {}
     for name, tab in (("σ (Eq. 5, quick search)", sig), ("δ(ε), ε = the sample spacing (quick search)", dlt),
                       ("δ(ε), ε = the class's deformation level: " + ", ".join(f"{c} {_f(eps[c])}" for c in
-                                                                               _classes(st) if c in eps), dlc)):
+                                                                               _classes(st) if c in eps), dlc),
+                      ("δ(ε), ε = ε̂, the class's level read off its matched maps (no ground truth): "
+                       + ", ".join(f"{c} {_f(eps_hat[c])}" for c in _classes(st) if c in eps_hat), dlh)):
         if not any(tab.values()):
             continue
         lines += [f"### Score {name} after 1 / 3 / all landmarks (Figure 7a)", "",
@@ -123,12 +127,17 @@ def summarise(data: dict, wall: float | None, peak: float | None = None) -> str:
                      for m in methods]
             lines.append("| **mean** | " + " | ".join(means) + (" | |" if paper else " |"))
             cor = data.get("correlation_by_protocol", {}).get(prot, data["correlation"]).get(mt, {})
-            sc, scc = cor.get("scale", {}), cor.get("scale_class", {})
+            sc, scc, sch = cor.get("scale", {}), cor.get("scale_class", {}), cor.get("scale_hat", {})
+            bars = cor.get("bars", {})
             lines += ["", f"Spearman ρ(score, error), {mt}, {cor.get('n')} (class, method, count) cells: "
                       f"σ: {_f(cor.get('rho'))} (p = {_f(cor.get('p'))}), within classes "
                       f"{_f(cor.get('within_class'))}; δ(ε = spacing): {_f(sc.get('rho'))} (p = {_f(sc.get('p'))}), "
                       f"within classes {_f(sc.get('within_class'))}; δ(ε = class): {_f(scc.get('rho'))} "
-                      f"(p = {_f(scc.get('p'))}), within classes {_f(scc.get('within_class'))}.", ""]
+                      f"(p = {_f(scc.get('p'))}), within classes {_f(scc.get('within_class'))}; δ(ε = ε̂): "
+                      f"{_f(sch.get('rho'))} (p = {_f(sch.get('p'))}), within classes {_f(sch.get('within_class'))}.",
+                      "", f"Error bars ({mt}, {bars.get('n', 0)} matchings; bar and error in sqrt(area)): held "
+                      f"{_f(bars.get('held'))}, median bar / error {_f(bars.get('median_ratio'))}, ρ(bar, error) "
+                      f"{_f(bars.get('rho'))} pooled, {_f(bars.get('within_class'))} within classes.", ""]
     lines += ["### Checks", ""] + checks(classes, methods, matchers, prots, sig, cells, L, data)
     return "\n".join(lines)
 
@@ -270,6 +279,9 @@ def main() -> None:
     ap.add_argument("--classes", default=None)
     ap.add_argument("--methods", default="fps,pls,hks,cnbs,cnbs-scale")
     ap.add_argument("--protocol", default="corresponding", choices=["corresponding", "independent", "both"])
+    ap.add_argument("--matchers", default="lh05,faq")
+    ap.add_argument("--max-targets", type=int, default=None)
+    ap.add_argument("--section", default="evaluate", help="the RESULTS.md section to write")
     ap.add_argument("--out", default="evaluation")
     ap.add_argument("--note", default=None, help="a Markdown file appended to the section (analysis)")
     ap.add_argument("--no-write", action="store_true", help="print only; leave RESULTS.md alone")
@@ -288,7 +300,8 @@ def main() -> None:
         t0 = time.perf_counter()
         ev = evaluate_dataset(a.dataset, classes=a.classes.split(",") if a.classes else None,
                               methods=a.methods.split(","), n_jobs=a.jobs, quick=a.quick,
-                              progress=sys.stderr.isatty(), protocol=a.protocol)
+                              progress=sys.stderr.isatty(), protocol=a.protocol, matchers=a.matchers.split(","),
+                              max_targets=a.max_targets)
         wall = time.perf_counter() - t0
         peak = peak_rss_mb()
         out = Path(a.out)
@@ -302,7 +315,7 @@ def main() -> None:
         text += "\n\n" + geometry_tables(data, Path(dataset))
     print(text)
     if not a.no_write:
-        write_section("evaluate", text)
+        write_section(a.section, text)
 
 
 if __name__ == "__main__":

@@ -59,6 +59,11 @@ def test_evaluation_of_an_isometric_class(dataset, tmp_path):
     # δ at the class's own deformation level, beside the default ε
     assert set(ev.settings["class_epsilon"]) == {"strip"} and set(lm["scale_class"]) == {1, 3, 10}
     assert "scale_class" in data["correlation"]["faq"]
+    # and at the level read off the matched maps (no ground truth): the median ε̂ of the class's matchings
+    eh = sorted(r.epsilon_hat for r in ev.records)
+    assert set(ev.settings["class_epsilon_hat"]) == {"strip"} and set(lm["scale_hat"]) == {1, 3, 10}
+    assert ev.settings["class_epsilon_hat"]["strip"] >= 0 and all(e >= 0 for e in eh)
+    assert "scale_hat" in data["correlation"]["faq"] and "read off its matched maps" in text
 
 
 def test_class_with_different_vertex_counts_is_refused(dataset, tmp_path):

@@ -1,11 +1,16 @@
-"""A class's own deformation level ε, read from its ground truth, and δ(ε) at it.
+"""A class's own deformation level ε, read from its ground truth or from its matched maps, and δ(ε) at it.
 
 The scale-aware score δ(ε) (``symmetry.scale``) predicts how badly a class's
 poses will be matched when ε is the distortion those poses actually cause.  An
 evaluation knows it from the ground truth: the RMS distortion of the true map
 between the null shape's samples and the same vertices of each target (shared
-vertex order only).  A user who knows their data's non-isometry passes it as
-``--epsilon``.
+vertex order only).  A user does not; what any collection has is its matched
+maps, and the distortion ε̂ of a map a distortion-minimising matcher found
+reads ε from below (``matching.error_bar``).  The class level read without
+ground truth is the median ε̂ over the class's matchings (every target,
+landmark set and matcher), and δ is computed at it too, so that the two
+levels can be compared on the same landmark sets.  A user who knows their
+data's non-isometry passes it as ``--epsilon``.
 """
 
 from __future__ import annotations
@@ -32,12 +37,30 @@ def class_epsilon(null_path, targets, setup: ShapeSetup) -> float:
 
 
 def class_scale_task(cls: str, null_path, targets, sets: dict, setup: ShapeSetup) -> dict:
-    """A class's deformation level ε (``class_epsilon``) and, at it, δ(ε) (quick search) of each
-    landmark set ``sets[method] = (vertices, counts)`` after each count, non-increasing in the count."""
+    """A class's deformation level ε (``class_epsilon``) and, at it, δ(ε) of each landmark set
+    (``scale_at``)."""
+    epsilon = class_epsilon(null_path, targets, setup)
+    return dict(cls=cls, epsilon=epsilon, scale_class=scale_at(null_path, sets, setup, epsilon))
+
+
+def hat_scale_task(cls: str, null_path, sets: dict, setup: ShapeSetup, epsilon_hat: float) -> dict:
+    """δ at the class level read off its matched maps: ``epsilon_hat`` (the median ε̂ of the class's
+    matchings, units of the null shape's sqrt(area)) in units of its metric shape (diameter 1)."""
+    from ..api import load
+    from ..matching.sampled import sample_surface
+
+    g = load(null_path)
+    unit = sample_surface(g, setup.n_points, setup.backend, setup.seed, cache=setup.cache).unit
+    epsilon = float(epsilon_hat) * unit / setup.metric_shape(g).scale
+    return dict(cls=cls, epsilon_hat=epsilon, scale_hat=scale_at(null_path, sets, setup, epsilon))
+
+
+def scale_at(null_path, sets: dict, setup: ShapeSetup, epsilon: float) -> dict:
+    """δ(ε) (quick search) of each landmark set ``sets[method] = (vertices, counts)`` after each count,
+    non-increasing in the count, on the null shape's metric shape (ε in its units)."""
     from ..selection import monotone
     from ..symmetry.scale import scale_score
 
-    epsilon = class_epsilon(null_path, targets, setup)
     shape = setup.metric_shape(null_path)
     where = {int(v): i for i, v in enumerate(shape.samples[:shape.n_samples])}
     out = {}
@@ -46,4 +69,4 @@ def class_scale_task(cls: str, null_path, targets, sets: dict, setup: ShapeSetup
         vals = [scale_score(shape.D, shape.n_samples, idx[:c], epsilon, seed=setup.seed,
                             effort="quick").displacement for c in counts]
         out[method] = dict(zip(counts, monotone(vals)))
-    return dict(cls=cls, epsilon=epsilon, scale_class=out)
+    return out

@@ -132,6 +132,13 @@ def markdown(ev, plots=()) -> str:
                 "ε = the median RMS distortion of the class's ground-truth maps (corresponding samples): "
                 + ", ".join(f"{c} {_fmt(v)}" for c, v in eps.items()) + " (diameters).", ""]
         out += _score_rows(st, at_class)
+    at_hat = score_table(ev.landmarks, "scale_hat")
+    if any(at_hat.values()):
+        eps = st.get("class_epsilon_hat", {})
+        out += ["", "## δ(ε) at each class's level read off its matched maps (no ground truth)", "",
+                "ε = the median RMS distortion ε̂ of the maps the matchers found for the class "
+                "(`matching.error_bar`): " + ", ".join(f"{c} {_fmt(v)}" for c, v in eps.items()) + " (diameters).", ""]
+        out += _score_rows(st, at_hat)
     for prot in protocols(ev):
         out += _error_sections(by_protocol(ev, prot), prot, scores)
     out += ["", "## Landmarks (null shape, file vertex ids)", ""]
@@ -187,7 +194,8 @@ def _error_sections(ev, protocol, scores) -> list[str]:
                 v is not None for v in sc3.values()) else "-"
             out.append(f"| {cls} | " + " | ".join(cells) + f" | {best} | {low} |")
         for key, name in (("scores", "σ"), ("scale", "δ(ε = sample spacing)"),
-                          ("scale_class", "δ(ε = the class's deformation level)")):
+                          ("scale_class", "δ(ε = the class's deformation level)"),
+                          ("scale_hat", "δ(ε = ε̂, the level read off the matched maps)")):
             rho, p, n = correlation(ev, matcher, key)
             rw, nw = within_class(ev, matcher, key)
             out += ["", f"Spearman rank correlation between the score {name} and error ({matcher}, {n} "
@@ -294,14 +302,15 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
 
 
 def correlations(ev) -> dict:
-    """{matcher: {rho, p, n, within_class, scale: {...}, scale_class: {...}, bars: {...}}}:
-    ``correlation`` and ``within_class`` of σ, of δ(ε) at the sample spacing (``scale``) and at each
-    class's own deformation level (``scale_class``), and the calibration of the per-matching error
+    """{matcher: {rho, p, n, within_class, scale: {...}, scale_class: {...}, scale_hat: {...}, bars: {...}}}:
+    ``correlation`` and ``within_class`` of σ, of δ(ε) at the sample spacing (``scale``), at each
+    class's own deformation level (``scale_class``) and at the level read off its matched maps
+    (``scale_hat``), and the calibration of the per-matching error
     bars (``bar_calibration``)."""
     out = {}
     for m in ev.settings["matchers"]:
         out[m] = dict(zip(("rho", "p", "n"), correlation(ev, m)), within_class=within_class(ev, m)[0])
-        for key in ("scale", "scale_class"):
+        for key in ("scale", "scale_class", "scale_hat"):
             out[m][key] = dict(zip(("rho", "p", "n"), correlation(ev, m, key)),
                                within_class=within_class(ev, m, key)[0])
         out[m]["bars"] = bar_calibration([r for r in ev.records if r.matcher == m])

@@ -16,6 +16,8 @@ path and should share the cache folder ``$SHAPECOND_CACHE``).
 
 from __future__ import annotations
 
+import math
+import statistics
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -23,7 +25,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..parallel import run_tasks
 from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count
-from .deformation_level import class_scale_task
+from .deformation_level import class_scale_task, hat_scale_task
 from .landmark_sets import (DEFAULT_LANDMARKS, LANDMARK_COST, PAPER_LANDMARKS, ShapeSetup, check_method,
                             landmark_task)
 from .protocols import PROTOCOLS, MatchingSetup, target_task
@@ -251,17 +253,39 @@ def evaluate_dataset(dataset_dir, options: EvaluationOptions | None = None, **kw
     t0 = time.perf_counter()
     records, eps = _matching_phase(plan, landmarks, opts)
     timing["matching"] = time.perf_counter() - t0
-    return Evaluation(landmarks, records, _settings(dataset_dir, plan, opts, eps), timing)
+    t0 = time.perf_counter()
+    eps_hat = _hat_phase(plan, landmarks, records, opts)
+    if eps_hat:
+        timing["delta at the matched level"] = time.perf_counter() - t0
+    return Evaluation(landmarks, records, _settings(dataset_dir, plan, opts, eps, eps_hat), timing)
 
 
-def _settings(dataset_dir, plan: dict, opts: EvaluationOptions, eps: dict) -> dict:
+def _hat_phase(plan: dict, landmarks: list, records: list, opts: EvaluationOptions) -> dict:
+    """Each class's level read off its matched maps (the median ε̂ of its matchings, which have one only
+    with error bars) and δ of every landmark set at it (``deformation_level.hat_scale_task``)."""
+    tasks = []
+    for p in plan.values():
+        eh = [r.epsilon_hat for r in records if r.cls == p.name and math.isfinite(r.epsilon_hat)]
+        done = [d for d in landmarks if d["cls"] == p.name]
+        if eh and done:
+            sets = {d["method"]: (d["vertices"], sorted(d["scale"])) for d in done}
+            tasks.append((hat_scale_task, (p.name, p.folder.null, sets, opts.shape, float(statistics.median(eh))), {}))
+    out, by_set = {}, {(d["cls"], d["method"]): d for d in landmarks}
+    for res in _run(tasks, opts):
+        out[res["cls"]] = res["epsilon_hat"]
+        for method, sc in res["scale_hat"].items():
+            by_set[(res["cls"], method)]["scale_hat"] = sc
+    return {c: out[c] for c in plan if c in out}
+
+
+def _settings(dataset_dir, plan: dict, opts: EvaluationOptions, eps: dict, eps_hat: dict) -> dict:
     protocols = [p for p in PROTOCOLS if any(p in c.protocols for c in plan.values())]
     s = {k: getattr(opts, k) for k in opts.__dataclass_fields__ if k not in ("scheduler", "classes", "progress", "force")}
     s.update(dataset=str(dataset_dir), classes=list(plan), protocols=protocols, n_points=opts.shape.n_points,
              methods=list(opts.methods), matchers=list(opts.matchers), counts=list(opts.counts),
              scheduler=None if opts.scheduler is None else str(opts.scheduler),
              landmark_counts={c: p.k for c, p in plan.items()},
-             targets={c: [t.stem for t in p.targets] for c, p in plan.items()}, class_epsilon=eps,
+             targets={c: [t.stem for t in p.targets] for c, p in plan.items()}, class_epsilon=eps, class_epsilon_hat=eps_hat,
              layouts={c: p.folder.layout for c, p in plan.items()})
     return s
 
