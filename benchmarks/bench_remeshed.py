@@ -131,7 +131,26 @@ def summarise(results: dict, peer: list, timing: dict) -> str:
     lines += _table(allc, classes, st, matchers)
     lines += _checks(allc, recs, peer, classes, st)
     lines += _bars(recs, st)
+    lines += _levels(results, st)
     return "\n".join(lines)
+
+
+def _levels(results: dict, st) -> list:
+    """Spearman ρ between δ and the mean error over (class, method, count) cells, δ at the sample spacing
+    and at each class's level read off its matched maps (``evaluation.report.correlations``)."""
+    cor = results.get("correlation_by_protocol", {}).get("remeshed") or results.get("correlation", {})
+    eps = st.get("class_epsilon_hat") or {}
+    if not eps:
+        return []
+    out = ["", "δ(ε) at each class's level read off its matched maps (ε̂ = the median RMS distortion of the class's "
+           "maps, no ground truth; diameters): " + ", ".join(f"{c} {v:.4f}" for c, v in eps.items()) + ". Spearman ρ "
+           "between δ and the mean error over (class, method, count) cells, pooled / mean within class:", "",
+           "| matcher | δ(ε = sample spacing) | δ(ε = ε̂ of the class) |", "|---|---|---|"]
+    for m in st["matchers"]:
+        sc, sh = cor.get(m, {}).get("scale", {}), cor.get(m, {}).get("scale_hat", {})
+        out.append(f"| {m} | {_f(sc.get('rho'))} / {_f(sc.get('within_class'))} | "
+                   f"{_f(sh.get('rho'))} / {_f(sh.get('within_class'))} |")
+    return out
 
 
 def _bars(recs, st) -> list:
@@ -143,8 +162,9 @@ def _bars(recs, st) -> list:
     rows = [SimpleNamespace(**{**r, "bar": _num(r.get("bar")), "error_area": _num(r.get("error_area"))}) for r in recs]
     if not any(math.isfinite(r.bar) for r in rows):
         return []
-    out = ["", "Error bars without ground truth (δ(2ε̂) on the null shape with the landmarks, ε̂ the map's own RMS "
-           "distortion; bar and error in sqrt(area)): held = share of matchings whose error is at most their bar "
+    out = ["", "Error bars without ground truth (the mean displacement of the witness of δ(ε̂) on the null shape's "
+           "first 200 samples with the landmarks, at least their resolution h/2; ε̂ the map's own RMS distortion; bar "
+           "and mean error in sqrt(area)): held = share of matchings whose error is at most their bar "
            "(target ≥ 0.9), ratio = median bar / error (target ≤ 5), ρ = Spearman between bar and error, pooled "
            "and the mean within classes (targets ≥ 0.6 and ≥ 0.4).", "",
            "| matcher | matchings | held | median bar / error | ρ pooled | ρ within class | median ε̂ | median bar |",
