@@ -11,6 +11,7 @@ import pytest
 import trimesh
 
 import shapecond as sc
+from shapecond.matching.sampled import sample_surface
 from shapecond.errors import InputError
 from shapecond.shapes.io import write_mesh
 
@@ -66,6 +67,7 @@ def test_no_function_returns_a_number_for_an_invalid_matrix(bad):
         "score": lambda: sc.score(bad), "local_score": lambda: sc.local_score(bad),
         "landmarks": lambda: sc.landmarks(bad, 1, "fps"), "heatmap": lambda: sc.heatmap(bad),
         "match": lambda: sc.match(bad, bad, [0], [0]), "SymmetryProblem": lambda: sc.SymmetryProblem(bad),
+        "deformation_level": lambda: sc.deformation_level(bad, bad),
     })
     for name, call in calls.items():
         with pytest.raises(InputError) as info:
@@ -182,7 +184,12 @@ G = "demo:sphere:subdivisions=1"
     (lambda: sc.landmarks(G, 2, "cnbs", 8, cache=False, methd="fps"), "no option 'methd'"),
     (lambda: sc.landmarks(G, 2, "fps", 8, cache=False, resolve_fraction=0.2), "no option 'resolve_fraction'"),
     (lambda: sc.score(G, 8, exact="yes", cache=False), "exact must be 'auto', True or False"),
-], ids=["match refin", "faq k", "landmarks methd", "fps resolve_fraction", "score exact=yes"])
+    (lambda: sc.deformation_level(G, G, n_points=8, error_bar=False), "unknown option 'error_bar'"),
+    (lambda: sc.deformation_level(G, [G], n_points=8, refin=False), "unknown option 'refin'"),
+    (lambda: sc.deformation_level(G, G, matcher="zoomout"), "not 'zoomout'"),
+    (lambda: sc.deformation_level(G, [G, G], landmarks=[0], landmarks_others=[[0]]), "2 other shapes"),
+], ids=["match refin", "faq k", "landmarks methd", "fps resolve_fraction", "score exact=yes", "level error_bar",
+        "level refin", "level zoomout", "level landmark lists"])
 def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call, needle):
     """They raised TypeError (or a plain ValueError) after the geodesics had been computed."""
     def no_work(*args, **kwargs):
@@ -240,3 +247,18 @@ def test_landmarks_and_heatmap_refuse_an_over_budget_request_unless_forced(monke
     big = _points_matrix(2800)
     with pytest.raises(sc.TooLargeError, match=r"heat map at N = 2800"):
         sc.heatmap(big)
+
+
+def test_the_deformation_level_is_zero_for_a_shape_against_itself_and_read_off_a_deformed_one():
+    """ε̂ of the map found without landmarks: the same shape is matched onto itself isometrically; a
+    bent copy with other vertex ids distorts its samples' distances, and δ at that level is taken."""
+    same = sc.deformation_level(G, G, n_points=30, cache=False)
+    assert same.epsilon == pytest.approx(0.0, abs=1e-9) and same.pairs == (same.epsilon_area,)
+    level = sc.deformation_level("demo:animal", ["demo:animal:delta=0.1", "demo:animal"], n_points=40, cache=False)
+    assert len(level.pairs) == 2 and level.pairs[1] == pytest.approx(0.0, abs=1e-9) and level.pairs[0] > 1e-3
+    assert level.epsilon_area == pytest.approx(np.median(level.pairs))       # the median over the pairs
+    g = sc.load("demo:animal")
+    src = sample_surface(g, 40, cache=False)
+    assert level.epsilon == pytest.approx(level.epsilon_area * src.unit / src.diameter)   # in diameters
+    r = sc.score("demo:animal", 40, epsilon=level.epsilon, cache=False)
+    assert r.scale.epsilon == level.epsilon and "2 matched map(s) (faq)" in level.sentence()

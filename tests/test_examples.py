@@ -8,7 +8,7 @@ import pytest
 
 import shapecond
 
-MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.matching",
+MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.matching", "shapecond.api.level",
            "shapecond.evaluation.run", "shapecond.checks", "shapecond.jsonable", "shapecond.output",
            "shapecond.symmetry.verdict"]
 

@@ -372,6 +372,10 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
         ["batch", *small, "--out", f["planted_journal/.t.parquet.journal"].parent / "t.parquet"])
     add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
     add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
+    for name in ("off_truncated_faces.off", "off_nan.off", "fifo.off"):  # the shape the level is read against
+        for cmd in (["score", GOOD, *SMALL], ["landmarks", GOOD, "-k", "2", "--method", "cnbs-scale", *SMALL]):
+            add(f"--epsilon-from {name} / {cmd[0]}", cmd + ["--epsilon-from", f[name], "--json"])
+    add("--epsilon and --epsilon-from together", ["score", GOOD, *SMALL, "--epsilon", "0.1", "--epsilon-from", GOOD])
     return cases
 
 

@@ -54,3 +54,17 @@ def test_bad_landmark_is_one_error_line(tmp_path, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("error:") and "landmark 9" in err[0]
+
+
+def test_delta_at_the_level_read_off_another_shape_says_where_its_epsilon_comes_from():
+    base = ["demo:animal", "--points", "40", "--no-cache", "--json"]
+    default = json.loads(run(*base).stdout)
+    assert default["epsilon_source"] == "the median sample spacing (default)"
+    given = json.loads(run(*base, "--epsilon", "0.05").stdout)
+    assert given["epsilon_source"] == "given (--epsilon)" and given["scale"]["epsilon"] == 0.05
+    out = run(*base, "--epsilon-from", "demo:animal:delta=0.1")
+    assert out.exit_code == 0, out.output
+    d = json.loads(out.stdout)
+    assert d["epsilon_source"].startswith("read off 1 matched map(s) (faq)")
+    assert d["scale"]["epsilon"] == d["deformation_level"]["epsilon"] > 0
+    assert d["scale"]["epsilon"] != default["scale"]["epsilon"]

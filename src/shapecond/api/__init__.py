@@ -14,6 +14,8 @@ every door.
 * ``problem``: ``SymmetryProblem``, one shape whose searches are kept for
   repeated queries;
 * ``matching``: ``match``, a dense map between two shapes guided by landmarks;
+* ``level``: ``deformation_level``, the distortion level ε̂ of a shape against
+  others, read off matched maps (the ε of ``score``, ``landmarks``, ``heatmap``);
 * ``results``: what they return (frozen dataclasses with ``to_dict()``,
   ``plot()``, ``to_html()``, short reprs).
 
@@ -32,7 +34,8 @@ _HOME = {"DEFAULT_POINTS": "inputs", "info": "inputs", "load": "inputs", "metric
          "require_mesh": "inputs", "match": "matching", "ShapeOptions": "options", "SymmetryProblem": "problem",
          "HeatMapResult": "results", "KappaResult": "results", "LandmarkResult": "results", "LocalResult": "results",
          "MatchResult": "results", "ScoreResult": "results", "heatmap": "scores", "kappa": "scores",
-         "landmarks": "scores", "local_score": "scores", "score": "scores"}
+         "landmarks": "scores", "local_score": "scores", "score": "scores", "DeformationLevel": "level",
+         "deformation_level": "level"}
 
 __all__ = sorted(_HOME)
 

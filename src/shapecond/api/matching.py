@@ -102,17 +102,12 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     True
     """
     opts, flags = _match_options(matcher, n_points, dense, samples, dict(options))
-    largest, force = flags["largest_component"], flags["force"]
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
-    if len(ids_s) != len(ids_t):
-        raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
-    src = load(source, largest_component=largest, force=force)
-    tgt = load(target, largest_component=largest, force=force)
+    src, tgt = _inputs(source, target, ids_s, ids_t, flags)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
     if isinstance(src, np.ndarray) or isinstance(tgt, np.ndarray):
         return _match_matrices(src, tgt, ids_s, ids_t, opts, summary)
-    guard_match(max(src.n_vertices, tgt.n_vertices), opts.n_points, len(ids_s), opts, force)
-    m = match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), opts)
+    m = _match_pair(src, tgt, ids_s, ids_t, opts, flags["force"])
     lines = np.full(int(src.ids.max()) + 1, -1, dtype=np.int64)
     lines[src.ids] = tgt.ids[m.vertex_map]
     summary.update(n_points=opts.n_points, n_source_vertices=int(src.n_vertices),
@@ -129,12 +124,31 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     return MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)), doubt)
 
 
-def _error_bar(m, src, tgt, landmarks, opts):
-    """``matching.error_bar.dense_error_bar`` on the matcher's samples (sampled here for the zoomout
-    matcher, which has none)."""
+def _inputs(source, target, ids_s, ids_t, flags):
+    """The two loaded inputs of a matching, once their landmark counts agree."""
+    if len(ids_s) != len(ids_t):
+        raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
+    largest, force = flags["largest_component"], flags["force"]
+    return load(source, largest_component=largest, force=force), load(target, largest_component=largest, force=force)
+
+
+def _match_pair(src, tgt, ids_s, ids_t, opts, force):
+    """``matching.pipeline.match_shapes`` of two loaded shapes, guarded (``guards.guard_match``)."""
+    guard_match(max(src.n_vertices, tgt.n_vertices), opts.n_points, len(ids_s), opts, force)
+    return match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), opts)
+
+
+def _bar_inputs(m, src, tgt, landmarks, opts):
+    """The matcher's source samples (sampled here for the zoomout matcher, which has none) and the
+    target's distance solver: what ``matching.error_bar`` reads a map's distortion with."""
     source = m.source if m.source is not None else sample_surface(src, opts.n_points, opts.backend, opts.seed,
                                                                   landmarks, opts.cache)
-    solver = CachedSolver(tgt, opts.backend, m.target)
+    return source, CachedSolver(tgt, opts.backend, m.target)
+
+
+def _error_bar(m, src, tgt, landmarks, opts):
+    """``matching.error_bar.dense_error_bar`` on the matcher's samples."""
+    source, solver = _bar_inputs(m, src, tgt, landmarks, opts)
     return dense_error_bar(source, tgt, m.vertex_map, len(landmarks), opts.seed, solver)
 
 

@@ -9,7 +9,7 @@ from ..errors import InputError
 from ..selection.cnbs import RESOLVE_FRACTION
 from .cmd_landmarks import _up
 from .common import (IDS_HELP, Float, api_options, emit_json, fmt, info, json_option, parse_ids, pop_shape_options,
-                     shape_options)
+                     shape_options, epsilon_options, resolve_epsilon)
 
 
 @click.command("heatmap")
@@ -27,8 +27,7 @@ from .common import (IDS_HELP, Float, api_options, emit_json, fmt, info, json_op
 @click.option("--score", "score", type=click.Choice(["sigma", "scale"]), default="sigma", show_default=True,
               help="sigma: the paper's σ with each point fixed; scale: the scale-aware δ(ε) "
                    "(the CNBS heat map of --method cnbs-scale).")
-@click.option("--epsilon", type=Float(0.0), default=None,
-              help="--score scale: distortion level ε [default: the median sample spacing].")
+@epsilon_options("--score scale: ")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
 def command(input_spec, **o):
@@ -41,15 +40,16 @@ def command(input_spec, **o):
     if not (png or html):
         raise InputError("give --png FILE or --html FILE (or both) for the heat map")
     n_points, options = api_options(pop_shape_options(o))
+    epsilon, source = resolve_epsilon(input_spec, o, n_points, options)
     result = heatmap(input_spec, parse_ids(o["landmarks"]), n_points, effort=o["effort"],
-                     resolve_fraction=o["resolve_fraction"], score=o["score"], epsilon=o["epsilon"], **options)
+                     resolve_fraction=o["resolve_fraction"], score=o["score"], epsilon=epsilon, **options)
     up = o["up"] or _up(result.shape)
     if png:
         result.plot(path=png, up=up, ply=ply, cmap="turbo")
         info(f"wrote {png}" + (f" and {ply}" if ply else ""))
     if html:
         info(f"wrote {result.to_html(html, up=up, title=result.title())}")
-    out = result.to_dict()
+    out = {**result.to_dict(), **(source if o["score"] == "scale" else {})}
     if o["as_json"]:
         emit_json(out)
     else:

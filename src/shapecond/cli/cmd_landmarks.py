@@ -7,7 +7,7 @@ import click
 from ..api import landmarks
 from ..selection import METHODS, SCORES
 from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
-                     pop_shape_options, shape_options)
+                     pop_shape_options, shape_options, epsilon_options, resolve_epsilon)
 
 
 @click.command("landmarks")
@@ -27,8 +27,7 @@ from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, js
 @click.option("--score", "score", type=click.Choice(SCORES), default=None,
               help="Score after each landmark: sigma (the paper's) or scale (δ(ε)) "
                    "[default: scale for cnbs-scale, sigma otherwise].")
-@click.option("--epsilon", type=Float(0.0), default=None,
-              help="Distortion level ε of the scale-aware score [default: the median sample spacing].")
+@epsilon_options("--method cnbs-scale or --score scale: ")
 @click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the landmarks (PNG).")
 @click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh with landmarks painted (PLY).")
 @click.option("--html", type=click.Path(dir_okay=False), default=None,
@@ -46,12 +45,14 @@ def command(input_spec, k, method, **o):
     user_ids = parse_ids(o["user_landmarks"], "--user-landmarks") if o["user_landmarks"] else []
     if method == "user" and not user_ids:
         raise click.UsageError("--method user needs --user-landmarks")
+    epsilon, source = resolve_epsilon(input_spec, o, n_points, options)
     result = landmarks(input_spec, k, method, n_points, user_landmarks=user_ids, scores=o["scores"],
-                       effort=o["effort"], score=o["score"], epsilon=o["epsilon"], **options)
+                       effort=o["effort"], score=o["score"], epsilon=epsilon, **options)
     _pictures(result, o, title=f"{method}: " + ", ".join(f"{v}" for v in result.landmarks))
     d = result.to_dict()
     if o["as_json"]:
-        emit_json({key: d[key] for key in ("landmarks", "scores", "method", "seconds", "score")})
+        emit_json({**{key: d[key] for key in ("landmarks", "scores", "method", "seconds", "score")},
+                   **(source if method == "cnbs-scale" or result.score == "scale" else {})})
         return
     name = "delta" if result.score == "scale" else "sigma"
     if result.initial_score is not None:

@@ -17,8 +17,8 @@ import click
 import numpy as np
 
 from ..api import score
-from .common import IDS_HELP, Float, api_options, emit_json, fmt, info, json_option, parse_ids, pop_shape_options, \
-    shape_options
+from .common import IDS_HELP, Float, api_options, emit_json, epsilon_options, fmt, info, json_option, parse_ids, \
+    pop_shape_options, resolve_epsilon, shape_options
 
 
 @click.command("score")
@@ -35,9 +35,7 @@ from .common import IDS_HELP, Float, api_options, emit_json, fmt, info, json_opt
               show_default=True, help="Work spent by the witness search.")
 @click.option("--witness-png", type=click.Path(dir_okay=False), default=None,
               help="Write a picture of the witness map (meshes and point clouds).")
-@click.option("--epsilon", type=Float(0.0), default=None,
-              help="Distortion level of the scale-aware score δ(ε), RMS, in diameters "
-                   "[default: the median sample spacing].")
+@epsilon_options("")
 @click.option("--scale-witness-png", type=click.Path(dir_okay=False), default=None,
               help="Write a picture of the scale-aware witness (the widest self-map within ε).")
 @click.option("--html", type=click.Path(dir_okay=False), default=None,
@@ -47,10 +45,11 @@ def command(input_spec, **o):
     """How hard is INPUT to match: σ bracket, κ bracket and the witness map."""
     t0 = time.perf_counter()
     n_points, options = api_options(pop_shape_options(o))
+    epsilon, source = resolve_epsilon(input_spec, o, n_points, options)
     result = score(input_spec, n_points, landmarks=parse_ids(o["landmarks"]), exact=True if o["exact"] else "auto",
-                   upper=o["upper"], time_limit=o["time_limit"], effort=o["effort"], epsilon=o["epsilon"], **options)
+                   upper=o["upper"], time_limit=o["time_limit"], effort=o["effort"], epsilon=epsilon, **options)
     _pictures(result, o["witness_png"], o["scale_witness_png"], o["html"])
-    report = result.to_dict()
+    report = {**result.to_dict(), **source}
     report["seconds"] = time.perf_counter() - t0  # everything, geodesics included
     if o["as_json"]:
         emit_json(report)
@@ -88,6 +87,7 @@ def _print(report: dict, sc) -> None:
                f"the widest self-map distorting distances by at most eps moves the samples "
                f"{fmt(d['displacement'])} RMS ({100 * d['moved']:.0f} % of them"
                + (", an exact isometry)" if d["isometry"] else ")"))
+    click.echo(f"eps from          {report['epsilon_source']}")
     click.echo(f"verdict           {report['verdict']}")
     for note in report["notes"]:
         info(f"note: {note}")

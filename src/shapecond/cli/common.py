@@ -130,6 +130,34 @@ def force_option(f):
                         help="Run even when the estimated time or memory is beyond the limits.")(f)
 
 
+def epsilon_options(what: str):
+    """``--epsilon`` and ``--epsilon-from``: the distortion level ε of δ, given or read off matched maps."""
+    def add(f):
+        f = click.option("--epsilon-from", "epsilon_from", multiple=True, type=click.Path(dir_okay=False),
+                         help="Read ε off the maps from INPUT to this shape (repeat for several: their median), "
+                              "found without ground truth (api.level): δ at your shapes' own deformation level.")(f)
+        return click.option("--epsilon", type=Float(0.0), default=None,
+                            help=what + "distortion level ε of δ(ε), RMS, in diameters "
+                                 "[default: the median sample spacing].")(f)
+    return add
+
+
+def resolve_epsilon(input_spec, o: dict, n_points, options: dict) -> tuple[float | None, dict]:
+    """(ε to pass on, the JSON fields saying where it comes from) from ``epsilon_options``."""
+    if o.get("epsilon_from") and o.get("epsilon") is not None:
+        raise InputError("give --epsilon or --epsilon-from, not both")
+    if not o.get("epsilon_from"):
+        return o.get("epsilon"), {"epsilon_source": "given (--epsilon)" if o.get("epsilon") is not None
+                                  else "the median sample spacing (default)"}
+    from ..api import deformation_level
+
+    keep = ("seed", "backend", "cache", "force", "largest_component")
+    level = deformation_level(input_spec, list(o["epsilon_from"]), n_points=n_points or DEFAULT_POINTS,
+                              **{k: options[k] for k in keep if k in options})
+    info(f"epsilon {level.epsilon:.4g} diameters, {level.sentence()}")
+    return level.epsilon, {"epsilon_source": level.sentence(), "deformation_level": level.to_dict()}
+
+
 def pop_shape_options(kwargs: dict) -> dict:
     """Split the shape options out of a command's keyword arguments."""
     return {k: kwargs.pop(k) for k in SHAPE_OPTION_NAMES if k in kwargs}
