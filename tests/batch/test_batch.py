@@ -208,3 +208,28 @@ def test_the_readme_documents_every_column():
     table = readme[readme.index("## Scoring collections"):]
     table = table[:table.index("\n\n", table.index("| column |"))]
     assert all(f"`{name}`" in table for name in schema.NAMES), [n for n in schema.NAMES if f"`{n}`" not in table]
+
+
+def test_delta_at_a_given_level_or_at_the_collections_own_level(tmp_path, capsys):
+    """``--epsilon`` for every shape, or ``--epsilon-from-collection``: the first shape matched to the next
+    ones, the median distortion of the maps; the default keeps the key of the tables written before."""
+    assert "epsilon" not in json.loads(params_key({}))
+    shapes = ["demo:animal", "demo:animal:delta=0.1", "demo:animal:delta=0.05"]
+    base = ["--points", 30, "--effort", "quick", "--no-cache", "--json"]
+    code, out, err = run_cli(capsys, "batch", *shapes, "-o", tmp_path / "given.csv", *base, "--epsilon", 0.05)
+    s = json.loads(out)
+    assert code == 0, err
+    assert s["epsilon"] == 0.05 and s["epsilon_source"] == "given (--epsilon)"
+    assert [r["delta_epsilon"] for r in read_table(tmp_path / "given.csv")] == [0.05] * 3
+    code, out, err = run_cli(capsys, "batch", *shapes, "-o", tmp_path / "coll.csv", *base, "--epsilon-from-collection")
+    s = json.loads(out)
+    assert code == 0, err
+    assert s["epsilon_source"].startswith("the collection's level, read off 2 matched map(s) (faq)")
+    import shapecond as sc
+    level = sc.deformation_level(shapes[0], shapes[1:], n_points=30, cache=False)
+    assert s["epsilon"] == pytest.approx(level.epsilon) and s["epsilon"] > 0
+    rows = read_table(tmp_path / "coll.csv")
+    assert all(r["delta_epsilon"] == pytest.approx(s["epsilon"]) for r in rows)
+    assert all(json.loads(r["params"])["epsilon"] == pytest.approx(s["epsilon"]) for r in rows)
+    code, out, err = run_cli(capsys, "batch", shapes[0], "-o", tmp_path / "one.csv", *base, "--epsilon-from-collection")
+    assert code == 2 and "at least two readable shapes" in err and not (tmp_path / "one.csv").exists()

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._version import __version__
+from ..checks import check_float
 from ..errors import InputError, ShapecondError
 from ..parallel import PeakMemory, worker_name
 from . import schema
@@ -27,7 +28,9 @@ from .inputs import content_hash
 #: The options of ``shapecond score`` a batch takes, with the command line's defaults.
 DEFAULT_OPTIONS = {"points": None, "metric": "geodesic", "geodesic_backend": "heat", "seed": 0,
                    "largest_component": False, "no_cache": False, "target": None, "target_factor": 8,
-                   "symmetry_map": None, "effort": "default", "what": ["score"], "force": False}
+                   "symmetry_map": None, "effort": "default", "what": ["score"], "force": False, "epsilon": None}
+#: ``epsilon`` read off the collection itself (``run.collection_level``) rather than given.
+COLLECTION = "collection"
 #: Options that shape the results (``no_cache`` and ``force`` do not).
 KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k not in ("no_cache", "force"))
 
@@ -82,6 +85,8 @@ def with_defaults(options: dict) -> dict:
         raise InputError(f"unknown batch option {sorted(unknown)[0]!r}")
     out = {**DEFAULT_OPTIONS, **{k: v for k, v in options.items() if v is not None}}
     out["what"] = parse_what(out["what"]).items()
+    if out["epsilon"] is not None and out["epsilon"] != COLLECTION:
+        out["epsilon"] = check_float(out["epsilon"], "epsilon", lo=0.0)
     return out
 
 
@@ -93,6 +98,8 @@ def params_key(options: dict) -> str:
     that it does not depend on where the file lies.
     """
     key = {k: v for k, v in with_defaults(options).items() if k in KEY_OPTIONS}
+    if key["epsilon"] is None:  # the default level: the key of the tables written before there was a choice
+        del key["epsilon"]
     if key.get("symmetry_map"):
         key["symmetry_map"] = content_hash(str(key["symmetry_map"]))
     return json.dumps(key, sort_keys=True, separators=(",", ":"))
@@ -156,8 +163,9 @@ def _fill(row: dict, spec: str, options: dict) -> None:
     if what.score or what.landmarks:
         shape = api.metric_shape(loaded, options.get("points"), **kw)
         row.update(n_points=shape.n_points, n_targets=shape.n_targets, covering_radius=shape.covering_radius)
+    eps = options.get("epsilon")
     if what.score:
-        _score_columns(row, api.score(shape, effort=effort, **kw))
+        _score_columns(row, api.score(shape, effort=effort, epsilon=eps, **kw))
     if what.local:
         if isinstance(loaded, np.ndarray):
             raise InputError("a distance matrix has no surface to deform: the local score needs a triangle mesh")
@@ -166,7 +174,8 @@ def _fill(row: dict, spec: str, options: dict) -> None:
                    local_zero_modes="; ".join(res.zero_modes) or None)
     if what.landmarks:
         k, method = what.landmarks
-        res = api.landmarks(shape, k, method, scores=True, effort=effort, **kw)
+        level = {"epsilon": eps} if eps is not None and method == "cnbs-scale" else {}
+        res = api.landmarks(shape, k, method, scores=True, effort=effort, **kw, **level)
         row.update(landmark_method=method, landmarks=[int(v) for v in res.landmarks],
                    landmark_scores=[math.nan if s is None else float(s) for s in res.scores])
 

@@ -15,17 +15,20 @@ import math
 import os
 import statistics
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from .._version import __version__
+from ..errors import InputError
 from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
-from .rows import params_key, shape_row, with_defaults
+from .rows import COLLECTION, params_key, shape_row, with_defaults
 from .table import Table, table_format
 
 #: How many of the most symmetric shapes and of the failures the summary lists.
 SUMMARY_TOP = 5
+#: Shapes matched to the first one to read a collection's level (``collection_level``).
+COLLECTION_PAIRS = 4
 
 
 @dataclass(frozen=True)
@@ -42,6 +45,8 @@ class BatchSummary:
     where: str
     most_symmetric: list = field(default_factory=list)   # dicts file, sigma_hat, resolution
     failures: list = field(default_factory=list)         # dicts file, error
+    epsilon: float | None = None                         # the level of δ (None: each shape's sample spacing)
+    epsilon_source: str = "the median sample spacing of each shape (default)"
 
     @property
     def shapes_per_minute(self) -> float | None:
@@ -51,7 +56,8 @@ class BatchSummary:
         return {"output": self.output, "shapes": self.shapes, "scored": self.scored, "resumed": self.resumed,
                 "failed": self.failed, "seconds": self.seconds, "median_seconds": self.median_seconds,
                 "shapes_per_minute": self.shapes_per_minute, "where": self.where,
-                "most_symmetric": self.most_symmetric, "failures": self.failures}
+                "most_symmetric": self.most_symmetric, "failures": self.failures, "epsilon": self.epsilon,
+                "epsilon_source": self.epsilon_source}
 
 
 def _failed_row(spec, digest, params, error) -> dict:
@@ -103,19 +109,21 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
     out : output table, ``.parquet``, ``.csv`` or ``.jsonl``.
     options : the shape options of ``shapecond score`` (``points``, ``metric``,
         ``geodesic_backend``, ``seed``, ``largest_component``, ``no_cache``,
-        ``target``, ``target_factor``, ``symmetry_map``) and ``effort``.
+        ``target``, ``target_factor``, ``symmetry_map``), ``effort`` and ``epsilon`` (the level of
+        δ for every shape in diameters, or "collection": read off the collection, ``collection_level``).
     what : ``score``, ``local``, ``landmarks:K:METHOD`` (``rows.parse_what``).
     **how : the fields of ``BatchRun`` (``n_jobs``, ``scheduler``, ``resume``, ``overwrite``, ``progress``).
     """
     t0 = time.perf_counter()
     how = BatchRun(**how)
     options = with_defaults({**(options or {}), "what": what})
-    params = params_key(options)
     table_format(out)
     check_where(how.n_jobs, how.scheduler)
     specs = expand_inputs(inputs)
     with Table(out, how.mode) as table:
         hashes = content_hashes(specs)
+        options, source = _level(options, [s for s, (_, why) in zip(specs, hashes) if not why])
+        params = params_key(options)
         have = {schema.row_key(r): r for r in table.rows}
         keys = [(s, h, params) for s, (h, _) in zip(specs, hashes)]
         unreadable = {s: why for s, (_, why) in zip(specs, hashes) if why}
@@ -128,7 +136,35 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
                  else "this process" if todo else "nothing to do")
         done = {schema.row_key(r): r for r in table.rows}
         batch_rows = [done[k] for k in keys]
-    return _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)
+    summary = _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)
+    return replace(summary, epsilon=options["epsilon"], epsilon_source=source or summary.epsilon_source)
+
+
+def _level(options: dict, readable: list) -> tuple[dict, str | None]:
+    """``options`` with ``epsilon="collection"`` replaced by the level read off the collection
+    (``collection_level``), and where the level comes from."""
+    if options["epsilon"] is None:
+        return options, None
+    if options["epsilon"] != COLLECTION:
+        return options, "given (--epsilon)"
+    level = collection_level(readable, options)
+    return {**options, "epsilon": level.epsilon}, f"the collection's level, {level.sentence()}"
+
+
+def collection_level(specs: list, options: dict):
+    """The deformation level of a collection (``api.level``): its first readable shape matched to the next
+    ``COLLECTION_PAIRS``, the median of their distortions, in diameters of the first shape.
+
+    A class level needs a few pairs, not all of them: each pair reads the same pose change from below,
+    and the median of a few discards a pair whose map went wrong (which reads the level higher).
+    """
+    from ..api import DEFAULT_POINTS, deformation_level
+
+    if len(specs) < 2:
+        raise InputError("the collection's level (--epsilon-from-collection) needs at least two readable shapes")
+    return deformation_level(specs[0], specs[1:1 + COLLECTION_PAIRS], n_points=options["points"] or DEFAULT_POINTS,
+                             seed=options["seed"], backend=options["geodesic_backend"], cache=not options["no_cache"],
+                             force=options["force"], largest_component=options["largest_component"])
 
 
 def _score(table, todo, options, how: BatchRun) -> str:
@@ -177,7 +213,8 @@ def format_summary(s: BatchSummary) -> str:
              f"where       {s.where}",
              f"time        {s.seconds:.1f} s"
              + (f", {s.shapes_per_minute:.2f} shapes/min" if s.shapes_per_minute else "")
-             + (f", median {s.median_seconds:.2f} s per shape" if s.median_seconds is not None else "")]
+             + (f", median {s.median_seconds:.2f} s per shape" if s.median_seconds is not None else ""),
+             f"epsilon     " + (f"{s.epsilon:.4g} diameters, " if s.epsilon is not None else "") + s.epsilon_source]
     if s.most_symmetric:
         lines.append("most symmetric (sigma_hat, resolution flag):")
         lines += [f"  {num(r['sigma_hat']):>8}  {r['resolution'] or '-':28s} {r['file']}" for r in s.most_symmetric]

@@ -9,7 +9,7 @@ import click
 
 from ..batch import format_summary, run_batch
 from ..errors import InputError
-from .common import emit_json, json_option, pop_shape_options, progress_enabled, shape_options
+from .common import Float, emit_json, json_option, pop_shape_options, progress_enabled, shape_options
 
 #: Exit status when some shapes failed (their rows hold the error).
 EXIT_SOME_FAILED = 3
@@ -26,6 +26,12 @@ EXIT_SOME_FAILED = 3
 @click.option("--what", "what", multiple=True, default=("score",), show_default=True,
               help="What to compute besides info, repeatable or comma-separated: score, local, "
                    "landmarks:K:METHOD (e.g. landmarks:5:fps).")
+@click.option("--epsilon", type=Float(0.0), default=None,
+              help="Distortion level ε of δ(ε) for every shape, RMS, in diameters [default: each shape's median "
+                   "sample spacing].")
+@click.option("--epsilon-from-collection", "epsilon_collection", is_flag=True,
+              help="Read ε off the collection itself: its first shape matched to the next four, the median "
+                   "distortion of the maps (no ground truth, api.level).")
 @click.option("--jobs", "-j", type=int, default=1, show_default=True, help="Local worker processes (joblib).")
 @click.option("--scheduler", default=None,
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
@@ -44,8 +50,11 @@ def command(inputs, out, what, as_json, **kw):
     """
     if kw["resume"] and kw["overwrite"]:
         raise InputError("--resume and --overwrite exclude each other")
+    if kw["epsilon"] is not None and kw["epsilon_collection"]:
+        raise InputError("give --epsilon or --epsilon-from-collection, not both")
     options = pop_shape_options(kw)
     options["effort"] = kw["effort"]
+    options["epsilon"] = "collection" if kw["epsilon_collection"] else kw["epsilon"]
     summary = run_batch(inputs, out, options, what=what, n_jobs=kw["jobs"], scheduler=kw["scheduler"],
                         resume=kw["resume"], overwrite=kw["overwrite"], progress=progress_enabled())
     if as_json:
