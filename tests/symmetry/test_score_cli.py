@@ -68,3 +68,17 @@ def test_delta_at_the_level_read_off_another_shape_says_where_its_epsilon_comes_
     assert d["epsilon_source"].startswith("read off 1 matched map(s) (faq)")
     assert d["scale"]["epsilon"] == d["deformation_level"]["epsilon"] > 0
     assert d["scale"]["epsilon"] != default["scale"]["epsilon"]
+
+
+def test_the_verdict_names_the_vertex_a_landmark_should_fix():
+    """The sample the witness moves farthest, by its input id; fixing it there ends the exact symmetry."""
+    import shapecond as sc
+    from shapecond.symmetry.verdict import farthest_moved
+
+    r = sc.score("demo:animal", 40, cache=False)
+    D, w = r.shape.D, r.score.witness
+    v = farthest_moved(D, w, r.shape.sample_ids)
+    i = list(r.shape.sample_ids).index(v)
+    assert D[i, w[i]] == max(D[j, w[j]] for j in range(len(w))) > 0
+    assert r.verdict.startswith("exact symmetry") and f"near vertex {v} (moved farthest)" in r.verdict
+    assert sc.score("demo:animal", 40, landmarks=[v], cache=False).sigma[0] < r.sigma[0]

@@ -120,5 +120,5 @@ def score_report(shape, landmark_ids=(), settings: ScoreSettings = ScoreSettings
     sc = symmetry_score(shape.D, shape.n_points, lm, search=search, options=s)
     res = resolution_for_shape(shape, lm, seed=s.seed, effort=s.effort, score=sc)
     delta = _scale(shape.D, shape.n_points, lm, s.epsilon, s.seed, s.effort, sc)
-    return ScoreReport(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta),
+    return ScoreReport(sc, shape, res, verdict(sc, shape.D, res, shape.covering_radius, delta, shape.sample_ids),
                        tuple(int(v) for v in landmark_ids), delta)

@@ -60,7 +60,15 @@ def witness_stats(D: np.ndarray, witness) -> dict:
 LOCAL_AMPLIFICATION = 3.0
 
 
-def verdict(score, D=None, resolution=None, covering_radius: float | None = None, scale=None) -> str:
+def farthest_moved(D: np.ndarray, witness, ids=None) -> int:
+    """The sample a map moves farthest (``ids[i]`` when given: its input id): where a landmark fixes most."""
+    t = np.asarray(witness, dtype=np.int64)
+    n = t.size
+    i = int(np.argmax(np.asarray(D)[np.arange(n), t]))
+    return int(ids[i]) if ids is not None else i
+
+
+def verdict(score, D=None, resolution=None, covering_radius: float | None = None, scale=None, ids=None) -> str:
     """One line saying what ``score`` (a ``SymmetryScore``) means for matching.
 
     Parameters
@@ -71,11 +79,16 @@ def verdict(score, D=None, resolution=None, covering_radius: float | None = None
     resolution : ResolutionReport or None (dense targets on a mesh).
     covering_radius : the samples' covering radius, in units of the diameter.
     scale : ScaleScore or None: δ(ε) with its witness.
+    ids : input ids of the samples: the verdict then names the region a landmark should fix (the
+        sample the witness, or δ's witness when the verdict is read at scale ε, moves farthest).
     """
     lo, hi = score.sigma_lower, score.sigma_upper
     stats = witness_stats(D, score.witness) if D is not None else None
     moved = f"{100 * stats['moved']:.0f} %" if stats else "some"
     fix = "fix at least one landmark that this map moves"
+    if D is not None and ids is not None:
+        w = scale.witness if scale is not None and scale.epsilon > 0 and math.isfinite(lo) else score.witness
+        fix += f", e.g. near vertex {farthest_moved(D, w[:len(score.witness)], ids)} (moved farthest)"
     if math.isinf(lo):
         return (f"exact symmetry: a self-map that moves {moved} of the samples preserves every distance, "
                 f"so no matcher can tell them from their images; {fix}")
