@@ -170,3 +170,28 @@ def test_landmark_selection_is_cached(dataset):
     assert list(cache_dir().glob("landmarks-*.json")) == cached
     assert first["ids"] == second["ids"] and first["scores"] == second["scores"]
     assert set(second["scores"]) == {1, 3, 4}
+
+
+def test_cnbs_scale_at_the_class_level_read_off_its_matched_maps(dataset, monkeypatch):
+    """cnbs-scale-hat is CNBS-scale at the level ``collection_level`` reads off the null shape's maps to its
+    targets (no ground truth): the same landmarks as CNBS-scale called with that ε."""
+    import shapecond as sc
+    from shapecond.evaluation import deformation_level as dl
+
+    seen = {}
+    real = dl.matched_level_task
+
+    def spy(*args):
+        seen.update(real(*args))
+        return seen
+    monkeypatch.setattr("shapecond.evaluation.run.matched_level_task", spy)
+    ev = evaluate_dataset(dataset, methods=("cnbs-scale-hat",), matchers=("faq",), n_points=40, counts=(3,),
+                          error_bars=False, cache=False)
+    lm = ev.landmarks[0]
+    assert lm["method"] == "cnbs-scale-hat" and seen["cls"] == "strip" and seen["epsilon"] > 0
+    null = dataset / "strip" / "strip0.off"
+    ref = sc.landmarks(null, len(lm["ids"]), "cnbs-scale", 40, epsilon=seen["epsilon"], target="samples", cache=False)
+    assert list(ref.landmarks) == lm["ids"]
+    assert {r.method for r in ev.records} == {"cnbs-scale-hat"}
+    with pytest.raises(InputError, match="cnbs-scale-hat"):
+        evaluate_dataset(dataset, methods=("cnbs-scale-ht",))

@@ -33,6 +33,10 @@ from .inputs import DEFAULT_POINTS
 from .matching import _bar_inputs, _inputs, _match_options, _match_pair
 
 
+#: Shapes matched to the first one of a collection to read its level (``collection_level``).
+COLLECTION_PAIRS = 4
+
+
 @dataclass(frozen=True)
 class DeformationLevel:
     """ε̂ of a shape against others (module docstring).
@@ -110,6 +114,19 @@ def deformation_level(x, others, *, landmarks=(), landmarks_others=None, matcher
                    for y, lm in zip(others, lms)], matcher, time.perf_counter() - t0)
 
 
+def collection_level(shapes: list, **options) -> DeformationLevel:
+    """The level of a collection: its first shape against the next ``COLLECTION_PAIRS`` (``deformation_level``,
+    in diameters of the first shape; ``**options`` as there).
+
+    A class level needs a few pairs, not all of them: each pair reads the same kind of pose change
+    from below, and the median of a few discards a pair whose map went wrong (which reads the level
+    higher).
+    """
+    if len(shapes) < 2:
+        raise InputError("the level of a collection needs at least two readable shapes")
+    return deformation_level(shapes[0], list(shapes[1:1 + COLLECTION_PAIRS]), **options)
+
+
 def _pair_level(x, y, ids_s, ids_t, opts, flags) -> tuple[float, float]:
     """(ε̂ in sqrt(area) units, the geodesic diameter of ``x`` in the same units) of one matched pair."""
     src, tgt = _inputs(x, y, ids_s, ids_t, flags)
@@ -128,4 +145,4 @@ def _level(pairs, matcher: str, seconds: float) -> DeformationLevel:
     return DeformationLevel(eps / diameter if diameter > 0 else 0.0, eps, tuple(e for e, _ in pairs), matcher, seconds)
 
 
-__all__ = ["DeformationLevel", "deformation_level"]
+__all__ = ["COLLECTION_PAIRS", "DeformationLevel", "collection_level", "deformation_level"]

@@ -18,7 +18,6 @@ import time
 from dataclasses import dataclass, field, replace
 
 from .._version import __version__
-from ..errors import InputError
 from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
@@ -27,8 +26,6 @@ from .table import Table, table_format
 
 #: How many of the most symmetric shapes and of the failures the summary lists.
 SUMMARY_TOP = 5
-#: Shapes matched to the first one to read a collection's level (``collection_level``).
-COLLECTION_PAIRS = 4
 
 
 @dataclass(frozen=True)
@@ -110,7 +107,7 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
     options : the shape options of ``shapecond score`` (``points``, ``metric``,
         ``geodesic_backend``, ``seed``, ``largest_component``, ``no_cache``,
         ``target``, ``target_factor``, ``symmetry_map``), ``effort`` and ``epsilon`` (the level of
-        δ for every shape in diameters, or "collection": read off the collection, ``collection_level``).
+        δ for every shape in diameters, or "collection": read off the collection, ``api.level.collection_level``).
     what : ``score``, ``local``, ``landmarks:K:METHOD`` (``rows.parse_what``).
     **how : the fields of ``BatchRun`` (``n_jobs``, ``scheduler``, ``resume``, ``overwrite``, ``progress``).
     """
@@ -142,29 +139,23 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
 
 def _level(options: dict, readable: list) -> tuple[dict, str | None]:
     """``options`` with ``epsilon="collection"`` replaced by the level read off the collection
-    (``collection_level``), and where the level comes from."""
+    (``api.level.collection_level``), and where the level comes from."""
     if options["epsilon"] is None:
         return options, None
     if options["epsilon"] != COLLECTION:
         return options, "given (--epsilon)"
-    level = collection_level(readable, options)
+    level = _collection_level(readable, options)
     return {**options, "epsilon": level.epsilon}, f"the collection's level, {level.sentence()}"
 
 
-def collection_level(specs: list, options: dict):
-    """The deformation level of a collection (``api.level``): its first readable shape matched to the next
-    ``COLLECTION_PAIRS``, the median of their distortions, in diameters of the first shape.
+def _collection_level(specs: list, options: dict):
+    """The collection's level (``api.level.collection_level``) with the batch's shape options."""
+    from ..api import DEFAULT_POINTS
+    from ..api.level import collection_level
 
-    A class level needs a few pairs, not all of them: each pair reads the same pose change from below,
-    and the median of a few discards a pair whose map went wrong (which reads the level higher).
-    """
-    from ..api import DEFAULT_POINTS, deformation_level
-
-    if len(specs) < 2:
-        raise InputError("the collection's level (--epsilon-from-collection) needs at least two readable shapes")
-    return deformation_level(specs[0], specs[1:1 + COLLECTION_PAIRS], n_points=options["points"] or DEFAULT_POINTS,
-                             seed=options["seed"], backend=options["geodesic_backend"], cache=not options["no_cache"],
-                             force=options["force"], largest_component=options["largest_component"])
+    return collection_level(specs, n_points=options["points"] or DEFAULT_POINTS, seed=options["seed"],
+                    backend=options["geodesic_backend"], cache=not options["no_cache"], force=options["force"],
+                    largest_component=options["largest_component"])
 
 
 def _score(table, todo, options, how: BatchRun) -> str:

@@ -30,8 +30,8 @@ EXIT_SOME_FAILED = 3
               help="Distortion level ε of δ(ε) for every shape, RMS, in diameters [default: each shape's median "
                    "sample spacing].")
 @click.option("--epsilon-from-collection", "epsilon_collection", is_flag=True,
-              help="Read ε off the collection itself: its first shape matched to the next four, the median "
-                   "distortion of the maps (no ground truth, api.level).")
+              help="Read ε off the collection itself: its first shape matched to the next few "
+                   "(api.level.collection_level), the median distortion of the maps, no ground truth.")
 @click.option("--jobs", "-j", type=int, default=1, show_default=True, help="Local worker processes (joblib).")
 @click.option("--scheduler", default=None,
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "

@@ -54,7 +54,8 @@ def _counts(text) -> list[int]:
 @click.argument("dataset_dir", type=click.Path(file_okay=False))
 @click.option("--classes", default=None, help="Comma-separated class folders [default: all].")
 @click.option("--methods", default=",".join(DEFAULT_METHODS), show_default=True,
-              help="Landmark methods (shapecond.selection).")
+              help="Landmark methods (shapecond.selection), and cnbs-scale-hat: CNBS-scale at each class's level "
+                   "read off its matched maps (no ground truth).")
 @click.option("--matchers", default="lh05,faq,zoomout", show_default=True,
               help="Matchers: lh05, faq (on samples, then the dense stage), zoomout (from the landmarks alone; "
                    "not in the corresponding protocol, which matches samples).")

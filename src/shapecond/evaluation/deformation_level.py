@@ -36,6 +36,16 @@ def class_epsilon(null_path, targets, setup: ShapeSetup) -> float:
     return float(np.median(rms)) * null.unit / scale
 
 
+def matched_level_task(cls: str, null_path, targets, setup: ShapeSetup) -> dict:
+    """The class's level read off its matched maps before any landmark (``api.level.collection_level``:
+    the null shape against its first targets, no ground truth), in units of its metric shape."""
+    from ..api.level import collection_level
+
+    level = collection_level([null_path, *targets], n_points=setup.n_points, seed=setup.seed, backend=setup.backend,
+                             cache=setup.cache, force=True)
+    return dict(cls=cls, epsilon=in_diameters(null_path, setup, level.epsilon_area))
+
+
 def class_scale_task(cls: str, null_path, targets, sets: dict, setup: ShapeSetup) -> dict:
     """A class's deformation level ε (``class_epsilon``) and, at it, δ(ε) of each landmark set
     (``scale_at``)."""
@@ -46,13 +56,19 @@ def class_scale_task(cls: str, null_path, targets, sets: dict, setup: ShapeSetup
 def hat_scale_task(cls: str, null_path, sets: dict, setup: ShapeSetup, epsilon_hat: float) -> dict:
     """δ at the class level read off its matched maps: ``epsilon_hat`` (the median ε̂ of the class's
     matchings, units of the null shape's sqrt(area)) in units of its metric shape (diameter 1)."""
+    epsilon = in_diameters(null_path, setup, epsilon_hat)
+    return dict(cls=cls, epsilon_hat=epsilon, scale_hat=scale_at(null_path, sets, setup, epsilon))
+
+
+def in_diameters(null_path, setup: ShapeSetup, epsilon_area: float) -> float:
+    """A level in units of the null shape's sqrt(area) (``matching.error_bar``) in units of its metric
+    shape (diameter 1), the unit of δ's ε."""
     from ..api import load
     from ..matching.sampled import sample_surface
 
     g = load(null_path)
     unit = sample_surface(g, setup.n_points, setup.backend, setup.seed, cache=setup.cache).unit
-    epsilon = float(epsilon_hat) * unit / setup.metric_shape(g).scale
-    return dict(cls=cls, epsilon_hat=epsilon, scale_hat=scale_at(null_path, sets, setup, epsilon))
+    return float(epsilon_area) * unit / setup.metric_shape(g).scale
 
 
 def scale_at(null_path, sets: dict, setup: ShapeSetup, epsilon: float) -> dict:

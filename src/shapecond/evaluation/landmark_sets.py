@@ -3,6 +3,11 @@
 Every method runs on the null shape's metric shape (N samples); the landmarks
 are recorded as internal vertex ids of the null shape (``vertices``) and as the
 file's ids (``ids``).  Cached on disk: CNBS at N = 400 takes minutes per class.
+
+Beside the library's methods, ``cnbs-scale-hat`` is CNBS-scale at the class's
+level read off its matched maps (``api.level.collection_level``: the null shape
+matched to its first targets without landmarks or ground truth), where
+``cnbs-scale`` takes the default ε: what a user with a collection runs.
 """
 
 from __future__ import annotations
@@ -22,7 +27,9 @@ DEFAULT_LANDMARKS = 10
 #: bump when the landmark methods change, to invalidate cached selections
 LANDMARK_CACHE_VERSION = "8"  # 8: HKS on the robust Laplace-Beltrami basis; 7: CNBS kicks of at most 12 swaps
 #: Relative cost of the landmark methods on TOSCA at N = 400, for ordering the tasks only.
-LANDMARK_COST = {"cnbs-scale": 4, "cnbs": 3, "cnbs-local": 2, "hks": 1}
+LANDMARK_COST = {"cnbs-scale": 4, "cnbs-scale-hat": 4, "cnbs": 3, "cnbs-local": 2, "hks": 1}
+#: Evaluation-only methods: a library method run at the class's level read off its matched maps.
+AT_CLASS_LEVEL = {"cnbs-scale-hat": "cnbs-scale"}
 
 
 @dataclass(frozen=True)
@@ -47,8 +54,8 @@ def check_method(name: str) -> None:
     """``InputError`` for an unknown landmark method (before any work)."""
     from ..selection import METHODS
 
-    if name not in METHODS:
-        raise InputError(f"unknown landmark method {name!r} (choose from {', '.join(METHODS)})")
+    if name not in METHODS and name not in AT_CLASS_LEVEL:
+        raise InputError(f"unknown landmark method {name!r} (choose from {', '.join([*METHODS, *AT_CLASS_LEVEL])})")
 
 
 def sigma_lower_bound(D, n_samples, landmarks, seed=0, quick=False) -> float:
@@ -85,7 +92,8 @@ def _scores(shape, idx, seed) -> dict:
     return dict(scores=scores, floor=floor, scale=dict(zip(counts, monotone([scale[c] for c in counts]))))
 
 
-def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, quick: bool = False) -> dict:
+def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, quick: bool = False,
+                  epsilon: float | None = None) -> dict:
     """Landmarks of one method on the null shape and the scores after 1, 3 and k of them.
 
     Scores: the quick witness search's σ for every method alike, so that Figure 7a
@@ -93,6 +101,7 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
     starts and would not be comparable with the baselines'); ``floor``: the best
     single swap with the same landmarks, to show when a score is only that;
     ``scale``: δ(ε) at the default ε (``symmetry.scale``), non-increasing in the count.
+    ``epsilon``: the class's level, for the methods of ``AT_CLASS_LEVEL``.
     """
     import warnings
 
@@ -101,7 +110,8 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
 
     st = Path(null_path).stat()
     key = disk.key_of(LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size, st.st_mtime_ns,
-                      method, k, setup.n_points, setup.seed, setup.backend, quick)
+                      method, k, setup.n_points, setup.seed, setup.backend, quick,
+                      *([epsilon] if method in AT_CLASS_LEVEL else []))
     d = disk.load_json("landmarks", key, _check_entry) if setup.cache else None
     if d is not None:
         for name in ("scores", "floor", "scale"):
@@ -111,7 +121,9 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
     shape = setup.metric_shape(null_path)
     with warnings.catch_warnings():  # the evaluation announced its whole cost up front
         warnings.simplefilter("ignore", CostWarning)
-        idx = [int(i) for i in landmarks(shape, k, method, seed=setup.seed, force=True).sample_indices][:k]
+        level = {"epsilon": epsilon} if method in AT_CLASS_LEVEL else {}
+        idx = [int(i) for i in landmarks(shape, k, AT_CLASS_LEVEL.get(method, method), seed=setup.seed, force=True,
+                                         **level).sample_indices][:k]
     seconds = time.perf_counter() - t0
     out = dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
                ids=[int(v) for v in shape.sample_ids[idx]], **_scores(shape, idx, setup.seed),

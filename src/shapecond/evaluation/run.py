@@ -25,8 +25,8 @@ from pathlib import Path
 from ..errors import InputError
 from ..parallel import run_tasks
 from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count
-from .deformation_level import class_scale_task, hat_scale_task
-from .landmark_sets import (DEFAULT_LANDMARKS, LANDMARK_COST, PAPER_LANDMARKS, ShapeSetup, check_method,
+from .deformation_level import class_scale_task, hat_scale_task, matched_level_task
+from .landmark_sets import (AT_CLASS_LEVEL, DEFAULT_LANDMARKS, LANDMARK_COST, PAPER_LANDMARKS, ShapeSetup, check_method,
                             landmark_task)
 from .protocols import PROTOCOLS, MatchingSetup, target_task
 from .records import Evaluation
@@ -194,8 +194,13 @@ def _run(tasks, opts: EvaluationOptions) -> list:
 def _landmark_phase(plan: dict, opts: EvaluationOptions) -> list:
     """The landmark selections, and the targets' geodesics beside them; longest tasks first."""
     setup = opts.shape
+    levels = {}
+    if any(m in AT_CLASS_LEVEL for m in opts.methods):  # the class levels their landmarks need, first
+        levels = {d["cls"]: d["epsilon"] for d in _run([(matched_level_task, (p.name, p.folder.null, p.targets, setup),
+                                                         {}) for p in plan.values()], opts)}
     by_cost = sorted(opts.methods, key=lambda m: -LANDMARK_COST.get(m, 0))
-    tasks = [(landmark_task, (p.name, p.folder.null, m, p.k, setup, opts.quick), {})
+    tasks = [(landmark_task, (p.name, p.folder.null, m, p.k, setup, opts.quick),
+              dict(epsilon=levels[p.name]) if m in AT_CLASS_LEVEL else {})
              for m in by_cost for p in plan.values()]
     tasks += [(prepare_task, (t, setup), dict(null_path=p.folder.null, protocols=p.protocols))
               for p in plan.values() for t in p.targets]
