@@ -106,3 +106,21 @@ def test_a_sample_map_bar_reads_the_distortion_of_its_own_samples():
     assert swapped.epsilon_hat == pytest.approx(eb.rms_distortion(src.D, src.D[np.ix_(np.r_[0, 1, 2, 4, 3, 5:40],
                                                                                    np.r_[0, 1, 2, 4, 3, 5:40])]))
     assert swapped.epsilon_hat > 0 and swapped.delta >= right.delta
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_self_map_between_found_and_true_map_distorts_by_the_difference_of_their_distortions(seed):
+    """The identity the level rests on (module docstring): S = T⁻¹∘T̂ has Ds − Ds[S, S] = E_T[S, S] − E_T̂,
+    so its distortion is ‖E_T∘S − E_T̂‖ (≤ ε + ε̂, and small when the two maps share their distortion)."""
+    rng = np.random.default_rng(seed)
+    n = 9
+    p = rng.uniform(size=(n, 2))
+    Ds = cdist(p, p)
+    q = p + rng.normal(scale=0.05, size=p.shape)
+    T, That = rng.permutation(n), rng.permutation(n)       # a "true" map and a "found" one, X -> X̃
+    Dt = cdist(q[np.argsort(T)], q[np.argsort(T)])         # any target metric
+    S = np.argsort(T)[That]                                 # S = T⁻¹∘T̂
+    E_T, E_hat = Dt[np.ix_(T, T)] - Ds, Dt[np.ix_(That, That)] - Ds
+    lhs = np.linalg.norm(Ds - Ds[np.ix_(S, S)])
+    assert lhs == pytest.approx(np.linalg.norm(E_T[np.ix_(S, S)] - E_hat), abs=1e-12)
+    assert lhs <= np.linalg.norm(E_T) + np.linalg.norm(E_hat) + 1e-12
