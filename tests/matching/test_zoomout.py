@@ -75,3 +75,27 @@ def test_a_map_that_does_not_fit_is_an_input_error(blob):
         zoomout(b, b, g.vertices, np.zeros(5, dtype=np.int64))
     with pytest.raises(InputError, match="k_start"):
         ZoomOutOptions(k_start=0).levels(50)
+
+
+def test_the_zoomout_matcher_keeps_the_least_distorted_of_its_starts(blob, monkeypatch):
+    """With more than 3 landmarks it also starts from the first 3 landmarks' descriptions and keeps the map
+    that distorts the sample distances less: a start spoiled by the extra landmarks costs nothing."""
+    from shapecond.matching import pipeline
+    from shapecond.matching.pipeline import MatchOptions, _least_distorted, match_landmarks_only
+
+    g, _ = blob
+    opts = MatchOptions(matcher="zoomout", n_points=60, cache=False)
+    right, scrambled = np.arange(g.n_vertices), np.random.default_rng(0).permutation(g.n_vertices)
+    lm = np.array([0, 100, 400, 250, 600])
+    assert _least_distorted(g, g, [scrambled, right], lm, opts, None) == 1
+    assert _least_distorted(g, g, [right, scrambled], lm, opts, None) == 0
+    assert _least_distorted(g, g, [scrambled], lm, opts, None) == 0      # one start: nothing to compare
+    real = pipeline.nearest_rows
+
+    def spoiled(X, Y):  # the description by every landmark goes wrong
+        return np.roll(real(X, Y), 17) if X.shape[1] > 3 else real(X, Y)
+    monkeypatch.setattr(pipeline, "nearest_rows", spoiled)
+    m = match_landmarks_only(g, g, lm, lm, opts)
+    assert m.info["start"] == "the first 3 landmarks" and np.mean(m.vertex_map == right) > 0.9
+    three = match_landmarks_only(g, g, lm[:3], lm[:3], opts)
+    assert three.info["start"] == "every landmark"
