@@ -103,6 +103,10 @@ def _f(v, d=2):
     return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{1000 * v:.{d}f}"
 
 
+def _rho(v):
+    return "-" if v is None or math.isnan(v) else f"{v:.2f}"
+
+
 def _mean(xs):
     xs = [x for x in xs if x is not None and not math.isnan(x)]
     return sum(xs) / len(xs) if xs else math.nan
@@ -148,8 +152,8 @@ def _levels(results: dict, st) -> list:
            "| matcher | δ(ε = sample spacing) | δ(ε = ε̂ of the class) |", "|---|---|---|"]
     for m in st["matchers"]:
         sc, sh = cor.get(m, {}).get("scale", {}), cor.get(m, {}).get("scale_hat", {})
-        out.append(f"| {m} | {_f(sc.get('rho'))} / {_f(sc.get('within_class'))} | "
-                   f"{_f(sh.get('rho'))} / {_f(sh.get('within_class'))} |")
+        out.append(f"| {m} | {_rho(sc.get('rho'))} / {_rho(sc.get('within_class'))} | "
+                   f"{_rho(sh.get('rho'))} / {_rho(sh.get('within_class'))} |")
     return out
 
 
