@@ -113,7 +113,8 @@ def test_the_error_bar_is_in_the_summary_and_its_doubt_field_in_a_ply(files, cap
     code, out, err = run(capsys, "match", d / "src.off", d / "tgt.off",
                          "--landmarks-source", ",".join(map(str, ls)),
                          "--landmarks-target", ",".join(str(inv[v]) for v in ls),
-                         "--points", 80, "-o", d / "bar.txt", "--doubt-ply", d / "doubt.ply", "--json")
+                         "--points", 80, "-o", d / "bar.txt", "--doubt-ply", d / "doubt.ply", "--doubt-png",
+                         d / "doubt.png", "--html", d / "match.html", "--json")
     assert code == 0, err
     bar = json.loads(out)["error_bar"]
     assert bar["epsilon"] == bar["epsilon_hat"] >= 0 and bar["n_samples"] == 80
@@ -122,6 +123,9 @@ def test_the_error_bar_is_in_the_summary_and_its_doubt_field_in_a_ply(files, cap
     import trimesh
     ply = trimesh.load(d / "doubt.ply", process=False)
     assert len(ply.vertices) == len(V)
+    assert (d / "doubt.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    page = (d / "match.html").read_text()
+    assert "error bar's doubt (on the source)" in page and bar["text"] in page
     code, out, err = run(capsys, "match", d / "src.off", d / "tgt.off", "--landmarks-source", "0,20,300",
                          "--landmarks-target", "0,20,300", "--points", 80, "-o", d / "nobar.txt", "--no-error-bar",
                          "--json")

@@ -233,7 +233,9 @@ def test_browser_match_page_with_errors(browser, tmp_path, capsys):
     page, errors, requests = _open(browser, out)
     text = _check(page, errors, requests, out)
     assert text.startswith("source vertex") and "→ target vertex" in text
-    assert page.locator("button.sc-layer").count() == 2 and "error field" in out.read_text()
+    assert page.locator("button.sc-layer").count() == 3 and "error field" in out.read_text()   # transfer, error, doubt
+    page.locator("button.sc-layer").nth(2).click()                                             # the doubt field draws
+    assert "error bar's doubt" in out.read_text() and not errors
 
 
 def test_browser_local_page(browser, tmp_path, capsys):

@@ -232,9 +232,27 @@ class MatchResult(Pictures):
         return jsonable({**self.summary, "map": self.map})
 
     def to_html(self, path, truth=None, **kw) -> str:
-        """Write the map as a self-contained HTML page (colour transfer, linked landmarks and, with
-        ``truth`` (target id per source id, or "same-ids"), the error field); returns the path."""
+        """Write the map as a self-contained HTML page (colour transfer, linked landmarks, the error bar's
+        doubt field and, with ``truth`` (target id per source id, or "same-ids"), the error field);
+        returns the path."""
         return super().to_html(path, truth=truth, **kw)
+
+    def plot(self, fig=None, path=None, **kw):
+        """The error bar's doubt field drawn on the source (where the next landmark should go), landmarks
+        ringed; onto ``fig`` (or a new Figure) and returned, or written to ``path`` (PNG)."""
+        from ..viz.render import new_figure, render_png
+        from ..viz.scene import guess_up
+
+        if self.doubt is None or self.drawing is None:
+            raise InputError("the map has no doubt field to draw: match two surfaces with error_bar=True")
+        src = self.drawing[0]
+        if path is None:
+            fig = fig if fig is not None else new_figure()
+        kw.setdefault("title", f"{src.name}: the error bar's doubt (sqrt(area))")
+        kw.setdefault("up", guess_up(src))
+        kw.setdefault("cmap", "turbo")
+        return render_png(path, src.vertices, src.faces, self.doubt[src.ids], landmarks=list(self.drawing[2]),
+                          colorbar_label="doubt, sqrt(area)", fig=fig, **kw)
 
     def __repr__(self) -> str:
         s = self.summary

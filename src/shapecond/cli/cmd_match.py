@@ -49,6 +49,8 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
 @click.option("--error-bar/--no-error-bar", default=True, show_default=True,
               help="Estimate the map's error without ground truth: δ(ε̂) on SOURCE with the landmarks fixed, ε̂ the "
                    "map's own RMS distortion (in the summary, and the doubt field with --doubt-ply).")
+@click.option("--doubt-png", type=click.Path(dir_okay=False), default=None,
+              help="Picture of SOURCE coloured by the error bar's doubt field (PNG), landmarks ringed.")
 @click.option("--doubt-ply", type=click.Path(dir_okay=False), default=None,
               help="SOURCE coloured by the error bar's doubt field: how far the widest map as distorted as this "
                    "one moves each point (PLY).")
@@ -75,8 +77,8 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
 
     if o["truth"] is not None and not o["html"]:
         raise InputError("--truth is shown by --html; give --html FILE too")
-    if o["doubt_ply"] and not o["error_bar"]:
-        raise InputError("--doubt-ply shows the error bar's doubt field: drop --no-error-bar")
+    if (o["doubt_ply"] or o["doubt_png"]) and not o["error_bar"]:
+        raise InputError("--doubt-ply and --doubt-png show the error bar's doubt field: drop --no-error-bar")
     t0 = time.perf_counter()
     lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
     result = match(source, target, parse_ids(landmarks_source, "--landmarks-source"),
@@ -89,6 +91,8 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
         np.savetxt(fh, result.map, fmt="%d")
     if o["doubt_ply"]:
         _write_doubt(result, o["doubt_ply"])
+    if o["doubt_png"]:
+        info(f"wrote {result.plot(path=o['doubt_png'])}")
     if o["html"]:
         from ..viz.pages import read_truth
 

@@ -18,6 +18,7 @@ from the same scenes as the PNGs (``viz.scene``):
 from __future__ import annotations
 
 import html as _html
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -45,13 +46,9 @@ def score_page(result, title: str | None = None) -> str:
     layers = list(scene.layers)
     if result.scale is not None:
         wide = witness_scene(shape, result.scale.witness, landmarks=tuple(sc.landmarks)).layers[1]
-        from dataclasses import replace
-
         layers.append(replace(wide, label=f"scale-aware witness, δ(ε) = {fmt(result.scale.displacement)}"))
     scene = scene.with_layers(layers)
     if note:
-        from dataclasses import replace
-
         scene = replace(scene, notes=(note,))
     lo, hi = result.sigma
     lines = [f"sigma    [{fmt(lo)}, {fmt(hi)}]   kappa [{fmt(result.kappa[0])}, {fmt(result.kappa[1])}]",
@@ -155,7 +152,18 @@ def match_errors(src, tgt, vmap, truth, n_points: int = 200, backend: str = "hea
     return idw(np.asarray(src.vertices, float), samples, err), err, samples
 
 
-def _match_layers(src, tgt, vmap, a, b, lms, lmt, truth):
+@dataclass(frozen=True)
+class MatchFields:
+    """Fields on the source a match page can show: the error against ``truth`` (target internal index per
+    source internal index, -1: none) and the error bar's ``doubt`` (sqrt(area) units per source internal
+    index, ``matching.error_bar``) with its sentence ``doubt_text``."""
+
+    truth: np.ndarray | None = None
+    doubt: np.ndarray | None = None
+    doubt_text: str = ""
+
+
+def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
     from scipy.spatial import cKDTree
 
     n_s = src.n_vertices
@@ -169,6 +177,7 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, truth):
     layers = [colour_layer(colours, len(colours), landmarks=marks, ranks=ranks, segments=seg,
                            label="colour transfer source → target")]
     notes = []
+    truth = fields.truth
     if truth is not None:
         field, err, samples = match_errors(src, tgt, vmap, truth)
         top = float(err.max()) if err.size else 1.0
@@ -182,21 +191,31 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, truth):
         notes.append(f"error field: geodesic distance on the target between the matched and the true vertex, "
                      f"measured at {samples.size} source samples (mean {np.mean(err):.3g} %, median "
                      f"{np.median(err):.3g} %) and interpolated between them")
+    if fields.doubt is not None:
+        full = np.concatenate([np.asarray(fields.doubt, float), np.full(tgt.n_vertices, np.nan)])
+        top = float(np.nanmax(full)) if np.any(np.isfinite(full)) else 0.0
+        lay = colour_layer(np.where(np.isfinite(full), full, 0.0), len(full), "turbo", 0.0, top or 1.0, hover=full,
+                           value_name="doubt, sqrt(area)", colorbar_label="error bar's doubt, sqrt(area)",
+                           landmarks=marks, ranks=ranks, segments=seg, label="error bar's doubt (on the source)")
+        lay.rgba[n_s:] = (0.75, 0.75, 0.75, 1.0)
+        layers.append(lay)
+        notes.append("doubt: how far the widest map that fits the landmarks and distorts no more than this one "
+                     "moves each point, without ground truth: " + fields.doubt_text)
     return layers, notes
 
 
-def match_page(src, tgt, vmap, landmarks_source=(), landmarks_target=(), *, truth=None, title=None,
-               lines=()) -> str:
-    """Page of a dense map between two Geometries; ``vmap``/``truth``: target internal index per source
-    internal index (-1: none); landmarks as internal indices.  Source left, target right."""
-    from dataclasses import replace
-
+def match_page(src, tgt, vmap, landmarks_source=(), landmarks_target=(), *, fields: MatchFields = MatchFields(),
+               title=None, lines=()) -> str:
+    """Page of a dense map between two Geometries; ``vmap``: target internal index per source internal
+    index (-1: none); landmarks as internal indices; ``fields``: the error and doubt fields to show.
+    Source left, target right."""
     if not (getattr(src, "vertices", None) is not None and getattr(tgt, "vertices", None) is not None):
         raise InputError("a map between distance matrices has no surface to draw")
     vmap = np.asarray(vmap, dtype=np.int64)
     a, b = _pair(src, tgt)
-    layers, notes = _match_layers(src, tgt, vmap, a, b, landmarks_source, landmarks_target,
-                                  None if truth is None else np.asarray(truth, dtype=np.int64))
+    if fields.truth is not None:
+        fields = replace(fields, truth=np.asarray(fields.truth, dtype=np.int64))
+    layers, notes = _match_layers(src, tgt, vmap, a, b, landmarks_source, landmarks_target, fields)
     F = None
     if src.faces is not None and tgt.faces is not None:
         F = np.vstack([src.faces, tgt.faces + src.n_vertices])
@@ -355,7 +374,9 @@ def _match_result_page(result, truth=None, **kw) -> str:
         t[known] = tgt.to_internal(truth[src.ids][known])
     s = result.summary
     lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
-    return match_page(src, tgt, vmap, ls, lt, truth=t, lines=lines, **kw)
+    doubt = None if result.doubt is None else result.doubt[src.ids]
+    fields = MatchFields(t, doubt, s.get("error_bar", {}).get("text", ""))
+    return match_page(src, tgt, vmap, ls, lt, fields=fields, lines=lines, **kw)
 
 
 def _local_result_page(result, **kw) -> str:
