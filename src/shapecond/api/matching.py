@@ -84,9 +84,10 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     samples : "fps" (each shape its own samples) or "same-ids" (the target sampled at the
         source's sample vertices: shapes with one vertex order; the summary gives the error).
     **options : ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``,
-        ``error_bar`` (default True: also bound the map's error without ground truth,
-        ``matching.error_bar``: the mean displacement of δ(ε̂)'s witness on the source, ε̂ the map's own distortion) and the sample
-        matcher's own options (lh05: ``k``, ``rounding``, ``refine``...).
+        ``error_bar`` (default True: also estimate the map's error without ground truth,
+        ``matching.error_bar``: the mean displacement of δ(ε̂)'s witness on the source, ε̂ the
+        map's own distortion) and the sample matcher's own options (lh05: ``k``, ``rounding``,
+        ``refine``...).
 
     Returns
     -------

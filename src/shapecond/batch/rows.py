@@ -29,7 +29,7 @@ from .inputs import content_hash
 DEFAULT_OPTIONS = {"points": None, "metric": "geodesic", "geodesic_backend": "heat", "seed": 0,
                    "largest_component": False, "no_cache": False, "target": None, "target_factor": 8,
                    "symmetry_map": None, "effort": "default", "what": ["score"], "force": False, "epsilon": None}
-#: ``epsilon`` read off the collection itself (``run.collection_level``) rather than given.
+#: ``epsilon`` read off the collection itself (``api.level.collection_level``) rather than given.
 COLLECTION = "collection"
 #: Options that shape the results (``no_cache`` and ``force`` do not).
 KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k not in ("no_cache", "force"))

@@ -154,8 +154,8 @@ def _collection_level(specs: list, options: dict):
     from ..api.level import collection_level
 
     return collection_level(specs, n_points=options["points"] or DEFAULT_POINTS, seed=options["seed"],
-                    backend=options["geodesic_backend"], cache=not options["no_cache"], force=options["force"],
-                    largest_component=options["largest_component"])
+                            backend=options["geodesic_backend"], cache=not options["no_cache"],
+                            force=options["force"], largest_component=options["largest_component"])
 
 
 def _score(table, todo, options, how: BatchRun) -> str:

@@ -47,8 +47,8 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
                    "ZoomOut on the Laplace-Beltrami bases with the landmarks as anchors), or the plain "
                    "extensions of the sample map (distances: local distance matching; nearest: nearest sample).")
 @click.option("--error-bar/--no-error-bar", default=True, show_default=True,
-              help="Estimate the map's error without ground truth: δ(ε̂) on SOURCE with the landmarks fixed, ε̂ the "
-                   "map's own RMS distortion (in the summary, and the doubt field with --doubt-ply).")
+              help="Estimate the map's error without ground truth: δ(ε̂) on SOURCE with the landmarks fixed, ε̂ "
+                   "the map's own RMS distortion (in the summary; the doubt field with --doubt-ply, --doubt-png).")
 @click.option("--doubt-png", type=click.Path(dir_okay=False), default=None,
               help="Picture of SOURCE coloured by the error bar's doubt field (PNG), landmarks ringed.")
 @click.option("--doubt-ply", type=click.Path(dir_okay=False), default=None,

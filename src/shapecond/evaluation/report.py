@@ -318,7 +318,8 @@ def correlations(ev) -> dict:
 
 
 def bar_calibration(records) -> dict:
-    """How the error bars (the mean displacement of δ(ε̂)'s witness) hold the errors (both in units of sqrt(area)), over records with both.
+    """How the error bars (the mean displacement of δ(ε̂)'s witness) hold the errors (both in units of
+    sqrt(area)), over records with both.
 
     ``held``: fraction of matchings whose error is at most their bar; ``median_ratio``: median of
     bar / error; ``rho``: Spearman's ρ between bar and error over the matchings, and

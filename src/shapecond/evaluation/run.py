@@ -290,7 +290,8 @@ def _settings(dataset_dir, plan: dict, opts: EvaluationOptions, eps: dict, eps_h
              methods=list(opts.methods), matchers=list(opts.matchers), counts=list(opts.counts),
              scheduler=None if opts.scheduler is None else str(opts.scheduler),
              landmark_counts={c: p.k for c, p in plan.items()},
-             targets={c: [t.stem for t in p.targets] for c, p in plan.items()}, class_epsilon=eps, class_epsilon_hat=eps_hat,
+             targets={c: [t.stem for t in p.targets] for c, p in plan.items()}, class_epsilon=eps,
+             class_epsilon_hat=eps_hat,
              layouts={c: p.folder.layout for c, p in plan.items()})
     return s
 

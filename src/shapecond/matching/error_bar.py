@@ -82,8 +82,8 @@ class ErrorBar:
     delta_diameter : the same as a fraction of the source's geodesic diameter.
     bar : the bar: the mean displacement of δ's witness (the statistic of a mean geodesic error), at
         least ``resolution``.
+    bar_diameter : the bar as a fraction of the source's geodesic diameter.
     resolution : half the median spacing of the bar's samples: the finest error the bar resolves.
-    bar_diameter : the same as a fraction of the source's geodesic diameter.
     n_samples : the samples the bar is computed on (``BAR_SAMPLES`` or all, if fewer).
     moved : fraction of the samples the witness moves.
     doubt : (N,) how far the witness moves each sample.
