@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
+from collections import Counter
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -59,8 +60,10 @@ def same_results(a: Path, b: Path) -> str:
     common = sorted(set(la) & set(lb), key=str)
     differ = [k for k in common if la[k] != lb[k]]
     only = len(set(la) ^ set(lb))
+    fields = Counter(next((str(x) for x in reversed(k) if isinstance(x, str)), "?") for k in differ)
     return (f"{len(common)} values in both runs' results.json, {len(differ)} differ"
-            + (f" (first: {'/'.join(map(str, differ[0]))}: {la[differ[0]]!r} vs {lb[differ[0]]!r})" if differ else "")
+            + (f" (by field: {', '.join(f'{f} {n}' for f, n in fields.most_common())}; first: "
+               f"{'/'.join(map(str, differ[0]))}: {la[differ[0]]!r} vs {lb[differ[0]]!r})" if differ else "")
             + f"; {only} held by one run only (fields added or removed between the versions)")
 
 
