@@ -87,9 +87,9 @@ def test_the_zoomout_matcher_keeps_the_least_distorted_of_its_starts(blob, monke
     opts = MatchOptions(matcher="zoomout", n_points=60, cache=False)
     right, scrambled = np.arange(g.n_vertices), np.random.default_rng(0).permutation(g.n_vertices)
     lm = np.array([0, 100, 400, 250, 600])
-    assert _least_distorted(g, g, [scrambled, right], lm, opts, None) == 1
-    assert _least_distorted(g, g, [right, scrambled], lm, opts, None) == 0
-    assert _least_distorted(g, g, [scrambled], lm, opts, None) == 0      # one start: nothing to compare
+    assert _least_distorted(g, g, [scrambled, right], lm, opts, None)[0] == 1
+    assert _least_distorted(g, g, [right, scrambled], lm, opts, None)[0] == 0
+    assert _least_distorted(g, g, [scrambled], lm, opts, None) == (0, None)  # one start: nothing to compare
     real = pipeline.nearest_rows
 
     def spoiled(X, Y):  # the description by every landmark goes wrong
@@ -97,5 +97,6 @@ def test_the_zoomout_matcher_keeps_the_least_distorted_of_its_starts(blob, monke
     monkeypatch.setattr(pipeline, "nearest_rows", spoiled)
     m = match_landmarks_only(g, g, lm, lm, opts)
     assert m.info["start"] == "the first 3 landmarks" and np.mean(m.vertex_map == right) > 0.9
+    assert np.array_equal(m.source.samples[:5], lm) and m.source.n_samples == 60   # what the error bar reuses
     three = match_landmarks_only(g, g, lm[:3], lm[:3], opts)
-    assert three.info["start"] == "every landmark"
+    assert three.info["start"] == "every landmark" and three.source is None

@@ -97,9 +97,9 @@ def deformation_level(x, others, *, landmarks=(), landmarks_others=None, matcher
     True
     """
     t0 = time.perf_counter()
-    if "error_bar" in options or "dense" in options or "samples" in options:
-        raise InputError("deformation_level() got unknown option "
-                         f"{next(k for k in ('error_bar', 'dense', 'samples') if k in options)!r}")
+    refused = [k for k in ("error_bar", "dense", "samples") if k in options]  # match's, meaningless here
+    if refused:
+        raise InputError(f"deformation_level() got unknown option {refused[0]!r}")
     if matcher == "zoomout":
         raise InputError("the level is read off a sample matcher's map: matcher 'faq' or 'lh05', not 'zoomout'")
     opts, flags = _match_options(matcher, n_points, "nearest", "fps", dict(options))

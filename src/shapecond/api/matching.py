@@ -140,8 +140,9 @@ def _match_pair(src, tgt, ids_s, ids_t, opts, force):
 
 
 def _bar_inputs(m, src, tgt, landmarks, opts):
-    """The matcher's source samples (sampled here for the zoomout matcher, which has none) and the
-    target's distance solver: what ``matching.error_bar`` reads a map's distortion with."""
+    """The matcher's source samples (sampled here when it has none: the zoomout matcher with 3
+    landmarks) and the target's distance solver: what ``matching.error_bar`` reads a map's distortion
+    with."""
     source = m.source if m.source is not None else sample_surface(src, opts.n_points, opts.backend, opts.seed,
                                                                   landmarks, opts.cache)
     return source, CachedSolver(tgt, opts.backend, m.target)

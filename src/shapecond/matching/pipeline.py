@@ -104,7 +104,9 @@ class DenseMatch:
     ----------
     vertex_map : (n_source,) int64 internal target vertex of every source vertex.
     sample_map : SampleMatch between ``source.samples`` and ``target.samples`` (None: zoomout matcher).
-    source, target : SampledSurface used (landmarks are their first samples; None: zoomout matcher).
+    source, target : SampledSurface used (landmarks are their first samples).  Zoomout matcher: no
+        target, and as source the samples its two starts were compared on (None with 3 landmarks),
+        which the error bar reads the map's distortion on without sampling the source again.
     info : dict of diagnostics.
     """
 
@@ -192,22 +194,24 @@ def match_landmarks_only(source_geometry, target_geometry, landmarks_source, lan
     maps = [dense_stage(source_geometry, target_geometry, nearest_rows(anchor.source_rows[:k].T,
                                                                       anchor.target_rows[:k].T), anchor, options)
             for k in sorted({ls.size, MIN_ZOOMOUT_LANDMARKS})[::-1]]
-    best = _least_distorted(source_geometry, target_geometry, maps, ls, options, solvers[1])
-    return DenseMatch(maps[best], None, None, None,
+    best, compared = _least_distorted(source_geometry, target_geometry, maps, ls, options, solvers[1])
+    return DenseMatch(maps[best], None, compared, None,
                       dict(matcher="zoomout", dense="zoomout", n_landmarks=int(ls.size),
                            start="every landmark" if best == 0 else f"the first {MIN_ZOOMOUT_LANDMARKS} landmarks"))
 
 
-def _least_distorted(source_geometry, target_geometry, maps: list, landmarks, options: MatchOptions, solver) -> int:
+def _least_distorted(source_geometry, target_geometry, maps: list, landmarks, options: MatchOptions,
+                     solver) -> tuple[int, SampledSurface | None]:
     """Index of the map that distorts the source's sample distances least (``error_bar.map_distortion`` on
-    as many samples as the error bar's, landmarks first); the first of equals."""
+    as many samples as the error bar's, landmarks first; the first of equals), and those samples (None:
+    one map, nothing to compare)."""
     if len(maps) == 1:
-        return 0
+        return 0, None
     src = sample_surface(source_geometry, min(options.n_points, BAR_SAMPLES), options.backend, options.seed,
                          landmarks, options.cache)
     solver = solver if solver is not None else CachedSolver(target_geometry, options.backend)
     costs = [map_distortion(src, target_geometry, m[src.samples], solver) for m in maps]
-    return int(np.argmin(costs))
+    return int(np.argmin(costs)), src
 
 
 def match_shapes(source_geometry, target_geometry, landmarks_source, landmarks_target,
