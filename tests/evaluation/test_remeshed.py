@@ -81,7 +81,7 @@ def test_reference_errors_of_the_truth_and_of_its_mirror_image():
     ref = np.column_stack([u.ravel(), v.ravel()])
     truth = np.argmin(((uv[None] - ref[:, None]) ** 2).sum(-1), axis=1)
     sym = np.array([int(np.argmin(((ref - [W - a, b]) ** 2).sum(1))) for a, b in ref])
-    errors, diameter, mirror = reference_errors(g, truth, {"truth": truth, "mirror": truth[sym]}, "heat", sym)
+    errors, diameter, mirror = reference_errors(g, truth, {"truth": truth, "mirror": truth[sym]}, "heat", truth[sym])
     assert errors["truth"].max() < 1e-6
     assert errors["mirror"].mean() == pytest.approx(mirror, rel=1e-6)   # a flip errs by the mirror distance
     assert errors["mirror"].mean() > 0.5 * mirror                       # ... so it is counted as flipped

@@ -2,8 +2,10 @@
 
 Each sub-folder of DATASET_DIR is a class: shapes with the same vertex count and
 order (ground truth = identity on vertex ids), or ``shapes/`` and ``corres/``
-folders of differently meshed shapes with ``.vts`` ground truth (the remeshed
-releases; DATASET_DIR may also be one such class).  See ``shapecond.evaluation``
+folders of differently meshed shapes with ``.vts`` ground truth; DATASET_DIR may
+also be one such class, or a release as it ships (``DIR/NAME.off`` +
+``DIR/corres/``, or ``shapes_train/`` + ``shapes_test/`` + ``corres/``; see
+``shapecond.evaluation.datasets``).  ``--pairs FILE`` matches exactly the listed pairs.  See ``shapecond.evaluation``
 for the protocols and ``shapecond.evaluation.report`` for the output.
 
 Running on a Dask cluster: start a scheduler and workers that can read
@@ -82,6 +84,13 @@ def _counts(text) -> list[int]:
 @click.option("--scheduler", default=None,
               help="Run on Dask: tcp://HOST:PORT of a running scheduler, or local:W to start a "
                    "LocalCluster with W workers.")
+@click.option("--pairs", "pairs_file", type=click.Path(dir_okay=False), default=None,
+              help="Match exactly the pairs listed in this file (two shape names a line, as a release's "
+                   "test_pairs.txt), across classes too; each source gets its own landmarks. Default: each "
+                   "class's null shape to the rest of its class.")
+@click.option("--landmark-count", type=Int(1, 10_000), default=None,
+              help="Landmarks per source, the largest count matched [default: the paper's count for its TOSCA "
+                   "classes, 10 otherwise].")
 @click.option("--error-bars/--no-error-bars", default=True, show_default=True,
               help="Give every matching its error bar (from δ(ε̂)) read off the map itself (one δ search each) and "
                    "report how the bars hold the true errors.")
@@ -100,7 +109,8 @@ def command(dataset_dir, **o):
         ev = evaluate(Path(dataset_dir), **lists, dense=o["dense"], n_jobs=o["jobs"], scheduler=run.client, quick=o["quick"],
                       n_points=o["points"], seed=o["seed"], backend=o["geodesic_backend"], cache=not o["no_cache"],
                       progress=progress_enabled(), max_targets=o["max_targets"], protocol=o["protocol"],
-                      force=o["force"], error_bars=o["error_bars"])
+                      force=o["force"], error_bars=o["error_bars"], pairs=o["pairs_file"],
+                      n_landmarks=o["landmark_count"])
     report = write_report(ev, o["out_dir"])
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),

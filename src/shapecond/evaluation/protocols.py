@@ -27,9 +27,10 @@ matcher, and the error of the map is measured on the target (``matching.metrics`
     from the landmarks alone), and the error is the field's: the mean over the
     reference points ``j`` of the target's geodesic distance between the image of
     ``vts_null[j]`` and ``vts_target[j]``, divided by ``sqrt(target area)``,
-    beside the same in % of half the target's geodesic diameter.  With a
-    reference symmetry a matching is *flipped* when its mean error exceeds half
-    the mean distance between mirror images.
+    beside the same in % of half the target's geodesic diameter.  Where the
+    ground truth gives the mirror images (``.sym.vts``, ``reference.sym``) a
+    matching is *flipped* when its mean error exceeds half the mean distance
+    between mirror images.
 """
 
 from __future__ import annotations
@@ -213,7 +214,7 @@ def landmark_images(landmarks, ref_source, ref_target, solver) -> np.ndarray:
     return np.asarray(out, dtype=np.int64)
 
 
-def reference_errors(target, ref_target, predictions: dict, backend: str, symmetry=None):
+def reference_errors(target, ref_target, predictions: dict, backend: str, mirror=None):
     """Raw geodesic errors at the reference points of every prediction, with the target's scale.
 
     Parameters
@@ -221,7 +222,7 @@ def reference_errors(target, ref_target, predictions: dict, backend: str, symmet
     target : Geometry.
     ref_target : (R,) internal target vertex of each reference point (the truth).
     predictions : key -> (R,) predicted target vertex of each reference point.
-    symmetry : (R,) mirror reference point of each reference point, or None.
+    mirror : (R,) internal target vertex of each reference point's mirror image, or None.
 
     Returns
     -------
@@ -230,7 +231,7 @@ def reference_errors(target, ref_target, predictions: dict, backend: str, symmet
     solver = DistanceSolver(target, backend)
     sources, which = np.unique(ref_target, return_inverse=True)
     errors = {k: np.empty(ref_target.size) for k in predictions}
-    mirror = np.full(ref_target.size, np.nan)
+    mirror_d = np.full(ref_target.size, np.nan)
     diameter = 0.0
     for lo in range(0, sources.size, ROW_BLOCK):
         rows = solver.distances(sources[lo:lo + ROW_BLOCK])
@@ -239,9 +240,24 @@ def reference_errors(target, ref_target, predictions: dict, backend: str, symmet
         r = which[sel] - lo
         for k, pred in predictions.items():
             errors[k][sel] = rows[r, pred[sel]]
-        if symmetry is not None:
-            mirror[sel] = rows[r, ref_target[symmetry[sel]]]
-    return errors, diameter, float(np.mean(mirror)) if symmetry is not None else math.nan
+        if mirror is not None:
+            mirror_d[sel] = rows[r, mirror[sel]]
+    return errors, diameter, float(np.mean(mirror_d)) if mirror is not None else math.nan
+
+
+def _mirror_images(cls: ClassFolder, target_path, geometry, ref_target) -> np.ndarray | None:
+    """Target vertex of each reference point's mirror image: ``.sym.vts`` of the target, else
+    ``reference.sym`` (``datasets``), else None."""
+    from ..shapes.vts import read_vts
+
+    p = cls.mirror_path(target_path)
+    if p is not None:
+        ids = read_vts(p, int(geometry.ids.max()) + 1, f"{cls.name}/corres/{p.name}")
+        if ids.size != ref_target.size:
+            raise InputError(f"{cls.name}/corres/{p.name} has {ids.size} lines for {ref_target.size} reference points")
+        return geometry.to_internal(ids)
+    sym = reference_symmetry(cls, ref_target.size)
+    return None if sym is None else ref_target[sym]
 
 
 def _reference_ids(cls: ClassFolder, shape_path, geometry) -> np.ndarray:
@@ -277,13 +293,13 @@ def _remeshed(cls, target_path, landmark_sets, setup: MatchingSetup, load) -> li
             m = match_landmarks_only(null, g, ls, lt, setup.options(matcher), solvers)
         maps[cell], seconds[cell] = m.vertex_map[ref_s], time.perf_counter() - t0
         bars[cell] = bar_fields(m, src, g, ls, solvers, s.seed) if setup.error_bars else {}
-    sym = reference_symmetry(cls, ref_t.size)
-    raw, diameter, mirror = reference_errors(g, ref_t, maps, s.backend, sym)
+    mirror_t = _mirror_images(cls, target_path, g, ref_t)
+    raw, diameter, mirror = reference_errors(g, ref_t, maps, s.backend, mirror_t)
     unit = surface_unit(g, diameter)
     out = []
     for (method, c, matcher), e in raw.items():
         err = normalise(e, diameter)
-        flipped = float(e.mean() > 0.5 * mirror) if sym is not None else math.nan
+        flipped = float(e.mean() > 0.5 * mirror) if mirror_t is not None else math.nan
         out.append(MatchRecord(cls.name, g.name, method, c, matcher, float(err.mean()), float(e.mean() / unit),
                                math.nan, seconds[(method, c, matcher)], curve_points(err), "remeshed",
                                flipped=flipped, **bars[(method, c, matcher)]))

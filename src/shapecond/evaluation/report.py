@@ -25,6 +25,12 @@ from shapecond.jsonable import fmt
 from shapecond.matching.metrics import cumulative_curve
 
 THRESHOLDS = np.linspace(0.0, 50.0, 101)  # % of half the geodesic diameter
+#: The field's curve: fraction of reference points within a geodesic error of x sqrt(area) (Kim et al. 2011).
+AREA_THRESHOLDS = np.linspace(0.0, 0.25, 101)
+#: A matching erring more than this (sqrt(area)) has failed (off-isometry targets, issue tables).
+FAILED = 0.05
+#: Per-class curve panels are drawn up to this many classes (a pairs list makes a group per source).
+MAX_PANELS = 16
 
 
 def protocols(ev) -> list:
@@ -103,8 +109,10 @@ def markdown(ev, plots=()) -> str:
     scores = score_table(ev.landmarks)
     out = ["# Landmark evaluation (paper Section 7, Figure 7)", "",
            f"Dataset `{st['dataset']}`; N = {st['n_points']} samples, {st['backend']} geodesics, "
-           f"seed {st['seed']}{', quick mode' if st['quick'] else ''}. Null shape matched to "
-           "every other shape of its class. Protocols: "
+           f"seed {st['seed']}{', quick mode' if st['quick'] else ''}. "
+           + (f"The {len(st['pairs'])} listed pairs, grouped by source (a row per source). " if st.get("pairs")
+              else "Null shape matched to every other shape of its class. ")
+           + "Protocols: "
            "*corresponding* — shapes with one vertex order, the target's samples are the null shape's "
            "sample vertices (the κ setting; error of sample x = geodesic distance from T(x) to x's own "
            "vertex), errors in % of half the target's geodesic diameter (paper); "
@@ -140,7 +148,10 @@ def markdown(ev, plots=()) -> str:
                 "(`matching.error_bar`): " + ", ".join(f"{c} {_fmt(v)}" for c, v in eps.items()) + " (diameters).", ""]
         out += _score_rows(st, at_hat)
     for prot in protocols(ev):
-        out += _error_sections(by_protocol(ev, prot), prot, scores)
+        sub = by_protocol(ev, prot)
+        if prot == "remeshed":
+            out += _pooled_section(sub)
+        out += _error_sections(sub, prot, scores)
     out += ["", "## Landmarks (null shape, file vertex ids)", ""]
     for d in sorted(ev.landmarks, key=lambda d: (d["cls"], d["method"])):
         out.append(f"- {d['cls']} {d['method']} ({d['seconds']:.1f} s): {d['ids']}")
@@ -162,6 +173,40 @@ def _score_rows(st, table, floors=None) -> list[str]:
             cells.append(" / ".join(_fmt(sc.get(c)) + ("*" if _at_floor(sc.get(c), fl.get(c)) else "")
                                     for c in sorted(sc)))
         out.append(f"| {cls} | {st['landmark_counts'][cls]} | " + " | ".join(cells) + " |")
+    return out
+
+
+def pooled(records) -> dict:
+    """{(method, n_landmarks, matcher): summary over every matching} in units of sqrt(area): mean,
+    median and worst error, matchings, failed (error > ``FAILED``), flipped, and the share held by its
+    error bar (NaN without bars)."""
+    acc = defaultdict(list)
+    for r in records:
+        acc[(r.method, r.n_landmarks, r.matcher)].append(r)
+    out = {}
+    for k, rs in acc.items():
+        e = np.array([r.error_area for r in rs])
+        flips = [r.flipped for r in rs if np.isfinite(r.flipped)]
+        held = [r.error_area <= r.bar for r in rs if np.isfinite(r.bar)]
+        out[k] = dict(n=len(rs), mean=float(np.mean(e)), median=float(np.median(e)), worst=float(np.max(e)),
+                      failed=int(np.sum(e > FAILED)), flipped=int(np.sum(flips)) if flips else None,
+                      held=float(np.mean(held)) if held else math.nan)
+    return out
+
+
+def _pooled_section(ev) -> list[str]:
+    """Every matching of the remeshed protocol pooled (the field's tables: a mean over the pairs)."""
+    table = pooled(ev.records)
+    out = ["", "## All matchings pooled, remeshed protocol (geodesic error / sqrt(area))", "",
+           f"Mean, median and worst over the matchings; failed: error > {FAILED}; flipped: mean error over half "
+           "the mean mirror distance (where the ground truth has mirror images); held: the share of matchings "
+           "whose error bar is at least the error.", "",
+           "| method | L | matcher | matchings | mean | median | worst | failed | flipped | held |",
+           "|---|---|---|---|---|---|---|---|---|---|"]
+    for (m, c, matcher), d in sorted(table.items()):
+        out.append(f"| {m} | {c} | {matcher} | {d['n']} | {_fmt(d['mean'], 4)} | {_fmt(d['median'], 4)} | "
+                   f"{_fmt(d['worst'], 4)} | {d['failed']} | {'-' if d['flipped'] is None else d['flipped']} | "
+                   f"{_fmt(d['held'])} |")
     return out
 
 
@@ -246,8 +291,12 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
     out_dir = Path(out_dir)
     paths = []
     st = ev.settings
+    if protocol == "remeshed":
+        paths.append(_field_curves(ev, out_dir))
     for matcher in st["matchers"]:
         classes = st["classes"]
+        if len(classes) > MAX_PANELS:
+            continue
         cols = min(4, len(classes))
         rows = math.ceil(len(classes) / cols)
         fig = new_figure(figsize=(4 * cols, 3.2 * rows))
@@ -301,6 +350,33 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
     return paths + [p]
 
 
+def _field_curves(ev, out_dir) -> Path:
+    """The field's curve pooled over every matching: one panel per matcher, one curve per landmark
+    method and count, the fraction of reference points within x sqrt(area), x in 0–0.25."""
+    from shapecond.viz.render import new_figure, save_figure
+
+    matchers = ev.settings["matchers"]
+    fig = new_figure(figsize=(4.2 * len(matchers), 3.4))
+    axes = fig.subplots(1, len(matchers), squeeze=False)[0]
+    for ax, matcher in zip(axes, matchers):
+        by = defaultdict(list)
+        for r in ev.records:  # the per-point errors are kept in % of half the diameter: rescale
+            if r.matcher == matcher and r.error > 0 and np.isfinite(r.error_area):
+                by[(r.method, r.n_landmarks)].append(r.errors * (r.error_area / r.error))
+        for (m, c), errs in sorted(by.items()):
+            ax.plot(AREA_THRESHOLDS, cumulative_curve(np.concatenate(errs), AREA_THRESHOLDS),
+                    label=f"{m} {c}", linestyle="-" if c <= 3 else "--")
+        ax.set_title(matcher)
+        ax.set_xlabel("geodesic error / sqrt(area)")
+        ax.set_ylim(0.0, 1.005)
+        ax.legend(fontsize=6)
+    axes[0].set_ylabel("fraction of reference points")
+    fig.tight_layout()
+    p = Path(out_dir) / "field_curves_remeshed.png"
+    save_figure(fig, p, dpi=90, bbox_inches=None)
+    return p
+
+
 def correlations(ev) -> dict:
     """{matcher: {rho, p, n, within_class, scale: {...}, scale_class: {...}, scale_hat: {...}, bars: {...}}}:
     ``correlation`` and ``within_class`` of σ, of δ(ε) at the sample spacing (``scale``), at each
@@ -345,6 +421,8 @@ def null_shapes(ev) -> dict:
     from shapecond.errors import InputError
     from shapecond.evaluation.datasets import find_classes
 
+    if "nulls" in ev.settings:  # written by the run (a pairs list's groups are not class folders)
+        return {c: (Path(p) if Path(p).is_file() else None) for c, p in ev.settings["nulls"].items()}
     try:
         found = find_classes(Path(ev.settings["dataset"]), ev.settings["classes"])
     except (InputError, OSError, KeyError):

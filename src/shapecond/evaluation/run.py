@@ -24,7 +24,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..parallel import run_tasks
-from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count
+from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count, pair_groups, read_pairs
 from .deformation_level import class_scale_task, hat_scale_task, matched_level_task
 from .landmark_sets import (AT_CLASS_LEVEL, DEFAULT_LANDMARKS, LANDMARK_COST, PAPER_LANDMARKS, ShapeSetup, check_method,
                             landmark_task)
@@ -56,6 +56,10 @@ class EvaluationOptions:
     progress : progress bars on stderr.
     force : run even when the estimate is beyond ``shapecond.limits``.
     error_bars : give every matching its error bar (from δ(ε̂), ``matching.error_bar``; one δ search each).
+    pairs : the pairs to match, ((source, target) names, ...) (``datasets.read_pairs``; None: each class's
+        null shape to the rest of its class).  Each source is then a group of its own.
+    n_landmarks : landmarks per source, the largest count matched (None: the paper's count for its
+        TOSCA classes, ``DEFAULT_LANDMARKS`` otherwise).
     """
 
     classes: tuple | None = None
@@ -75,6 +79,8 @@ class EvaluationOptions:
     progress: bool = False
     force: bool = False
     error_bars: bool = True
+    pairs: tuple | None = None
+    n_landmarks: int | None = None
 
     def __post_init__(self):
         from ..matching.pipeline import DENSE_STAGES, MATCHERS
@@ -92,6 +98,10 @@ class EvaluationOptions:
             raise InputError("landmark counts must be positive integers")
         if not (isinstance(self.n_jobs, int) and self.n_jobs >= 1):
             raise InputError(f"n_jobs must be a positive integer, got {self.n_jobs!r}")
+        if self.n_landmarks is not None and not (isinstance(self.n_landmarks, int) and self.n_landmarks >= 1):
+            raise InputError(f"n_landmarks must be a positive integer, got {self.n_landmarks!r}")
+        if self.pairs is not None and self.classes:
+            raise InputError("give either classes or a pairs list, not both")
 
     @property
     def shape(self) -> ShapeSetup:
@@ -127,16 +137,21 @@ def _protocols(folder: ClassFolder, choice: str) -> tuple:
 def plan_classes(dataset_dir, opts: EvaluationOptions) -> dict[str, ClassPlan]:
     """Every class of the run with its targets and protocols, checked before any work."""
     classes = opts.classes
-    if opts.quick and not classes:
-        names = list(find_classes(dataset_dir))
-        classes = [c for c in ("wolf", "centaur") if c in names] or names[:2]
+    if opts.pairs is not None:
+        found = pair_groups(dataset_dir, opts.pairs)
+        found = dict(list(found.items())[:2]) if opts.quick else found
+    else:
+        if opts.quick and not classes:
+            names = list(find_classes(dataset_dir))
+            classes = [c for c in ("wolf", "centaur") if c in names] or names[:2]
+        found = find_classes(dataset_dir, classes)
     plan = {}
-    for name, folder in find_classes(dataset_dir, classes).items():
+    for name, folder in found.items():
         check_layout(folder)
         max_targets = opts.max_targets or (2 if opts.quick else None)
         targets = folder.targets[:max_targets] if max_targets else folder.targets
-        plan[name] = ClassPlan(folder, targets, PAPER_LANDMARKS.get(name, DEFAULT_LANDMARKS),
-                               _protocols(folder, opts.protocol))
+        k = opts.n_landmarks or PAPER_LANDMARKS.get(name, DEFAULT_LANDMARKS)
+        plan[name] = ClassPlan(folder, targets, k, _protocols(folder, opts.protocol))
     return plan
 
 
@@ -289,6 +304,8 @@ def _settings(dataset_dir, plan: dict, opts: EvaluationOptions, eps: dict, eps_h
     s.update(dataset=str(dataset_dir), classes=list(plan), protocols=protocols, n_points=opts.shape.n_points,
              methods=list(opts.methods), matchers=list(opts.matchers), counts=list(opts.counts),
              scheduler=None if opts.scheduler is None else str(opts.scheduler),
+             pairs=None if opts.pairs is None else [list(p) for p in opts.pairs],
+             nulls={c: str(p.folder.null) for c, p in plan.items()},
              landmark_counts={c: p.k for c, p in plan.items()},
              targets={c: [t.stem for t in p.targets] for c, p in plan.items()}, class_epsilon=eps,
              class_epsilon_hat=eps_hat,
@@ -303,6 +320,13 @@ def evaluation_options(**kw) -> EvaluationOptions:
     if bad:
         raise InputError(f"evaluate() got unknown option {bad[0]!r} (its options: {', '.join(sorted(known))})")
     kw = {k: tuple(v) if isinstance(v, list) else v for k, v in kw.items()}
+    if kw.get("pairs") is not None:
+        pairs = kw["pairs"]
+        pairs = read_pairs(pairs) if isinstance(pairs, (str, Path)) else pairs
+        if not all(isinstance(p, (tuple, list)) and len(p) == 2 and all(isinstance(n, str) for n in p)
+                   for p in pairs) or not pairs:
+            raise InputError("pairs: a pairs file, or a list of (source, target) shape names")
+        kw["pairs"] = tuple((str(a), str(b)) for a, b in pairs)
     return EvaluationOptions(**kw)
 
 
@@ -312,10 +336,12 @@ def evaluate(dataset_dir, **options) -> Evaluation:
     Parameters
     ----------
     dataset_dir : a folder of class folders: meshes with one vertex order (TOSCA), or
-        ``shapes/`` + ``corres/*.vts`` folders (the remeshed releases), or one such class.
+        ``shapes/`` + ``corres/*.vts`` folders, or a release as it ships (flat or split layout,
+        ``datasets``), or one such class.
     **options : fields of ``EvaluationOptions`` (classes, methods, matchers, protocol, counts,
         n_points, seed, backend, cache, dense, n_jobs, scheduler, quick, max_targets, progress,
-        force); an unknown name is refused before any work.
+        force, error_bars, pairs (a pairs file or a list of name pairs), n_landmarks); an unknown name
+        is refused before any work.
 
     Returns
     -------
