@@ -124,3 +124,20 @@ def test_the_self_map_between_found_and_true_map_distorts_by_the_difference_of_t
     lhs = np.linalg.norm(Ds - Ds[np.ix_(S, S)])
     assert lhs == pytest.approx(np.linalg.norm(E_T[np.ix_(S, S)] - E_hat), abs=1e-12)
     assert lhs <= np.linalg.norm(E_T) + np.linalg.norm(E_hat) + 1e-12
+
+
+def test_off_isometry_the_level_is_at_least_the_landmarks_own_distortion():
+    g = bumpy_blob(subdivisions=3)
+    src = sample_surface(g, 40, landmarks=[5, 60, 200], cache=False)
+    stretched = src.D.copy()
+    stretched[0, 1] = stretched[1, 0] = src.D[0, 1] * 1.5      # the target's landmarks 0 and 1 farther apart
+    eps_l = eb.landmark_distortion(src.D, stretched, 3)
+    assert eps_l == pytest.approx(np.sqrt(2 * (0.5 * src.D[0, 1]) ** 2 / 6))   # RMS over the 6 ordered pairs
+    assert eb.landmark_distortion(src.D, stretched, 1) == 0.0 and eb.landmark_distortion(src.D, src.D, 3) == 0.0
+    low = error_bar(src, 3, 0.01, seed=0)
+    high = error_bar(src, 3, 0.01, seed=0, epsilon_landmarks=eps_l)
+    assert low.epsilon == pytest.approx(0.01) and high.epsilon == pytest.approx(max(0.01, eps_l))
+    assert high.delta >= low.delta and "landmarks themselves" in high.sentence()
+    assert high.to_dict()["epsilon_source"] == "the landmarks' own distortion"
+    with pytest.raises(InputError):
+        error_bar(src, 3, 0.01, epsilon_landmarks=float("inf"))

@@ -94,26 +94,32 @@ def check_distances(D_source, D_target):
     return np.asarray(D_source, dtype=np.float64), np.asarray(D_target, dtype=np.float64)
 
 
-def descriptors(D: np.ndarray, landmarks: np.ndarray, quantile_weight: float = 0.5) -> np.ndarray:
-    """Landmark-distance descriptors ``f(x)`` (module docstring), shape (N, L + Q)."""
+def descriptors(D: np.ndarray, landmarks: np.ndarray, quantile_weight: float = 0.5, sides=None) -> np.ndarray:
+    """Landmark-distance descriptors ``f(x)`` (module docstring), shape (N, L + Q), followed by the
+    sides of the landmark pairs ``sides`` (N, P) when given (``orientation.orientation_features``,
+    a block weighing like the L distances; divided by sqrt(L) as they are)."""
     D = np.asarray(D, dtype=np.float64)
-    parts = [D[:, landmarks] / np.sqrt(max(len(landmarks), 1))]
+    root = np.sqrt(max(len(landmarks), 1))
+    parts = [D[:, landmarks] / root]
+    if sides is not None:
+        parts.append(np.asarray(sides, dtype=np.float64) / root)
     if quantile_weight > 0:
         parts.append(quantile_weight * np.quantile(D, QUANTILE_LEVELS, axis=1).T)
     return np.hstack(parts)
 
 
 def descriptor_cost(D_source, D_target, landmarks_source, landmarks_target,
-                    quantile_weight: float = 0.5) -> np.ndarray:
-    """Euclidean descriptor distance between every source and target sample, (N_s, N_t)."""
-    fs = descriptors(D_source, landmarks_source, quantile_weight)
-    ft = descriptors(D_target, landmarks_target, quantile_weight)
+                    quantile_weight: float = 0.5, sides=None) -> np.ndarray:
+    """Euclidean descriptor distance between every source and target sample, (N_s, N_t); ``sides``:
+    (source, target) side features of the samples, or None."""
+    fs = descriptors(D_source, landmarks_source, quantile_weight, None if sides is None else sides[0])
+    ft = descriptors(D_target, landmarks_target, quantile_weight, None if sides is None else sides[1])
     sq = (fs * fs).sum(1)[:, None] + (ft * ft).sum(1)[None, :] - 2.0 * fs @ ft.T
     return np.sqrt(np.maximum(sq, 0.0))
 
 
 def k_best_candidates(D_source, D_target, landmarks_source, landmarks_target, k: int = 20,
-                      quantile_weight: float = 0.5) -> Candidates:
+                      quantile_weight: float = 0.5, sides=None) -> Candidates:
     """The ``k`` best target samples of every source sample (module docstring).
 
     Parameters
@@ -128,6 +134,7 @@ def k_best_candidates(D_source, D_target, landmarks_source, landmarks_target, k:
         Candidates per non-landmark source sample (clipped to the free targets).
     quantile_weight : float
         Weight ``w`` of the intrinsic quantile part of the descriptor.
+    sides : (source, target) side features of the samples (``descriptors``), or None.
 
     Returns
     -------
@@ -139,7 +146,7 @@ def k_best_candidates(D_source, D_target, landmarks_source, landmarks_target, k:
         raise InputError(f"the target has fewer samples ({n_t}) than the source ({n_s})")
     if k < 1:
         raise InputError("k (candidates per sample) must be at least 1")
-    cost = descriptor_cost(D_source, D_target, ls, lt, quantile_weight)
+    cost = descriptor_cost(D_source, D_target, ls, lt, quantile_weight, sides)
     free_t = np.setdiff1d(np.arange(n_t), lt)
     free_s = np.setdiff1d(np.arange(n_s), ls)
     kk = min(k, free_t.size)

@@ -41,6 +41,7 @@ import numpy as np
 from shapecond.errors import InputError
 from shapecond.matching.dense import DENSE_METHODS, dense_map
 from shapecond.matching.error_bar import BAR_SAMPLES, map_distortion
+from shapecond.matching.orientation import orientation_features
 from shapecond.matching.metrics import errors_from_rows, normalise
 from shapecond.matching.sampled import (CachedSolver, SampledSurface, carry_samples, insert_landmarks,
                                         sample_surface, surface_unit)
@@ -139,6 +140,8 @@ def dense_stage(source_geometry, target_geometry, initial, anchors: Anchors | No
     """The vertex map ``initial`` refined by landmark-anchored ZoomOut on both shapes' bases."""
     bs = laplace_basis(source_geometry, cache=options.cache)
     bt = laplace_basis(target_geometry, cache=options.cache)
+    if anchors is not None:
+        anchors = anchors.oriented(source_geometry, target_geometry)
     return zoomout(bs, bt, source_geometry.vertices, initial, anchors, options.zoomout)
 
 
@@ -152,11 +155,22 @@ def match_surfaces(source: SampledSurface, target: SampledSurface, landmarks_sou
     ls, lt = _landmark_pair(landmarks_source, landmarks_target)
     source, ils = insert_landmarks(source, ls, solvers[0])
     target, ilt = insert_landmarks(target, lt, solvers[1])
-    sm = match_samples(source.D, target.D, ils, ilt, options.matcher, seed=options.seed, **options.matcher_options)
+    extra = dict(options.matcher_options)
+    if "sides" not in extra:
+        extra["sides"] = sample_sides(source, ils, target, ilt)
+    sm = match_samples(source.D, target.D, ils, ilt, options.matcher, seed=options.seed, **extra)
     vmap = _extend(source, target, sm.t, ls.size, options)
     vmap[ls] = lt  # landmarks map exactly onto their images
     return DenseMatch(vmap, sm, source, target, dict(matcher=options.matcher, dense=options.dense,
                                                      n_landmarks=int(ls.size)))
+
+
+def sample_sides(source: SampledSurface, landmarks_source, target: SampledSurface, landmarks_target):
+    """(source, target) sides of the landmark pairs at the samples (``orientation``; landmarks given as
+    sample indices), or None for point clouds and fewer than 2 landmarks."""
+    fs = orientation_features(source.geometry, source.rows[np.asarray(landmarks_source)])
+    ft = orientation_features(target.geometry, target.rows[np.asarray(landmarks_target)])
+    return None if fs is None or ft is None else (fs[source.samples], ft[target.samples])
 
 
 def _extend(source: SampledSurface, target: SampledSurface, t, n_landmarks: int, options: MatchOptions):
@@ -191,13 +205,25 @@ def match_landmarks_only(source_geometry, target_geometry, landmarks_source, lan
         rows = (solver if solver is not None else CachedSolver(g, options.backend)).distances(lm)
         anchors.append(rows / surface_unit(g, float(rows.max())))
     anchor = Anchors(ls, lt, anchors[0], anchors[1])
-    maps = [dense_stage(source_geometry, target_geometry, nearest_rows(anchor.source_rows[:k].T,
-                                                                      anchor.target_rows[:k].T), anchor, options)
+    maps = [dense_stage(source_geometry, target_geometry, _nearest_description(source_geometry, target_geometry,
+                                                                              anchor, k), anchor, options)
             for k in sorted({ls.size, MIN_ZOOMOUT_LANDMARKS})[::-1]]
     best, compared = _least_distorted(source_geometry, target_geometry, maps, ls, options, solvers[1])
     return DenseMatch(maps[best], None, compared, None,
                       dict(matcher="zoomout", dense="zoomout", n_landmarks=int(ls.size),
                            start="every landmark" if best == 0 else f"the first {MIN_ZOOMOUT_LANDMARKS} landmarks"))
+
+
+def _nearest_description(source_geometry, target_geometry, anchor: Anchors, k: int) -> np.ndarray:
+    """The zoomout matcher's start: every source vertex to the target vertex whose description by the
+    first ``k`` landmarks is nearest: its geodesic distances to them (sqrt(area) units) and, on meshes,
+    the side of every pair of them it lies on (``orientation``), which distances alone leave open."""
+    first = Anchors(anchor.source[:k], anchor.target[:k], anchor.source_rows[:k], anchor.target_rows[:k])
+    first = first.oriented(source_geometry, target_geometry)
+    xs, xt = first.source_rows.T, first.target_rows.T
+    if first.source_sides is not None:
+        xs, xt = np.hstack([xs, first.source_sides]), np.hstack([xt, first.target_sides])
+    return nearest_rows(xs, xt)
 
 
 def _least_distorted(source_geometry, target_geometry, maps: list, landmarks, options: MatchOptions,

@@ -67,6 +67,8 @@ class FAQOptions:
     seed : passed to scipy as ``rng`` (used only for randomised starts).
     nested : also solve with the first three seeds and keep the larger objective;
         ``info["start"]`` says which start won (``"descriptor"``/``"barycenter"``, or ``"core"``).
+    sides : (source, target) side features of the samples (``orientation``), appended to the
+        descriptors of the start; None: distances alone.
     """
 
     objective: str = "distance"
@@ -77,6 +79,7 @@ class FAQOptions:
     maxiter: int = 60
     seed: int = 0
     nested: bool = True
+    sides: tuple | None = None
 
     def __post_init__(self):
         if self.objective not in ("distance", "gaussian"):
@@ -137,7 +140,7 @@ def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(), opti
     if opts.init == "descriptor" and ls.size < n:
         free_s = np.setdiff1d(np.arange(n), ls)
         free_t = np.setdiff1d(np.arange(n), lt)
-        cost = descriptor_cost(Ds, Dt, ls, lt, opts.quantile_weight)[np.ix_(free_s, free_t)]
+        cost = descriptor_cost(Ds, Dt, ls, lt, opts.quantile_weight, opts.sides)[np.ix_(free_s, free_t)]
         faq["P0"] = _start_matrix(n, ls, lt, *linear_sum_assignment(cost))
     res = quadratic_assignment(A, B, method="faq", options=faq)
     t = np.asarray(res.col_ind, dtype=np.int64)

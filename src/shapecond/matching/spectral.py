@@ -345,6 +345,8 @@ class LH05Options:
     nested : step 6: with more than three landmarks and ``refine``, also match with the
         first three (this very function), send that map to the other landmarks, refine it
         and keep the larger objective (``nested``).
+    sides : (source, target) side features of the samples (``orientation``), appended to the
+        candidates' descriptors; None: distances alone.
     """
 
     k: int = 20
@@ -357,6 +359,7 @@ class LH05Options:
     tol: float = 1e-7
     max_iter: int = 500
     nested: bool = True
+    sides: tuple | None = None
 
     def __post_init__(self):
         if self.rounding not in ("greedy", "assignment"):
@@ -393,7 +396,8 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), opt
     opts = merge_options(LH05Options, options, kw, "lh05_match")
     t0 = time.perf_counter()
     run = _LH05(*check_distances(D_source, D_target), opts)
-    cand = k_best_candidates(run.Ds, run.Dt, landmarks_source, landmarks_target, opts.k, opts.quantile_weight)
+    cand = k_best_candidates(run.Ds, run.Dt, landmarks_source, landmarks_target, opts.k, opts.quantile_weight,
+                             opts.sides)
     h = default_sigma(run.Ds, 1.0)
     s = opts.sigma_factor * h if opts.sigma is None else float(opts.sigma)
     if not s > 0:

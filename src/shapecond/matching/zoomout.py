@@ -100,15 +100,32 @@ class Anchors:
     target: np.ndarray
     source_rows: np.ndarray
     target_rows: np.ndarray
+    source_sides: np.ndarray | None = None
+    target_sides: np.ndarray | None = None
 
     def features(self, sigma: float) -> tuple[np.ndarray, np.ndarray]:
-        """Gaussian anchor coordinates ``(n_s, L)`` and ``(n_t, L)`` (module docstring)."""
+        """Gaussian anchor coordinates ``(n_s, L)`` and ``(n_t, L)`` (module docstring), followed by the
+        sides of the landmark pairs when known (``oriented``)."""
         scale = 1.0 / (sigma * math.sqrt(math.pi))
 
         def g(rows):
             return (scale * np.exp(-np.square(rows.T, dtype=np.float64) / (2.0 * sigma * sigma))).astype(np.float32)
 
-        return g(self.source_rows), g(self.target_rows)
+        fs, ft = g(self.source_rows), g(self.target_rows)
+        if self.source_sides is not None and self.target_sides is not None:
+            fs, ft = np.hstack([fs, self.source_sides]), np.hstack([ft, self.target_sides])
+        return fs, ft
+
+    def oriented(self, source_geometry, target_geometry) -> "Anchors":
+        """The same anchors with the sides of every landmark pair on both meshes
+        (``orientation.orientation_features``; unchanged for point clouds)."""
+        from shapecond.matching.orientation import orientation_features
+
+        fs = orientation_features(source_geometry, self.source_rows)
+        ft = orientation_features(target_geometry, self.target_rows)
+        if fs is None or ft is None:
+            return self
+        return Anchors(self.source, self.target, self.source_rows, self.target_rows, fs, ft)
 
 
 def nearest_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
