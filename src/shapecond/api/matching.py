@@ -3,16 +3,18 @@
 from __future__ import annotations
 
 import inspect
+from functools import partial
 
 import numpy as np
 
 from ..checks import check_choice, check_flag, check_int, check_seed, parse_ids
 from ..errors import InputError
-from ..matching.error_bar import dense_error_bar
+from ..matching.error_bar import bar_and_samples
 from ..matching.pipeline import MATCHERS, MatchOptions, match_samples, match_shapes
 from ..matching.sampled import CachedSolver, sample_surface
 from ..matching.seeded import faq_match
 from ..matching.spectral import lh05_match
+from ..matching.suggest import suggest_landmarks
 from .guards import guard_match
 from .inputs import DEFAULT_POINTS, load
 from .options import BACKENDS
@@ -68,7 +70,8 @@ def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
 
 
 def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
-          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", samples: str = "fps", **options) -> MatchResult:
+          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", samples: str = "fps", suggest: int = 0,
+          **options) -> MatchResult:
     """Match ``source`` to ``target`` with corresponding landmarks fixed (input ids, same order).
 
     Parameters
@@ -88,6 +91,8 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
         ``matching.error_bar``: the mean displacement of δ(ε̂)'s witness on the source, ε̂ the
         map's own distortion) and the sample matcher's own options (lh05: ``k``, ``rounding``,
         ``refine``...).
+    suggest : how many next landmarks to suggest (``matching.suggest``; needs the error bar), added to
+        the summary as ``"suggestions"``; ``.suggest(k)`` gives them later too.
 
     Returns
     -------
@@ -103,6 +108,9 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     True
     """
     opts, flags = _match_options(matcher, n_points, dense, samples, dict(options))
+    suggest = check_int(suggest, "suggest", lo=0)
+    if suggest and not flags["error_bar"]:
+        raise InputError("suggesting landmarks reads the error bar: it needs error_bar=True")
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     src, tgt = _inputs(source, target, ids_s, ids_t, flags)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
@@ -116,13 +124,18 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
                    samples=opts.samples, matcher_info=m.sample_map.info if m.sample_map is not None else {})
     if opts.samples == "same-ids":
         summary.update(sample_error=m.info["sample_error"], exact=m.info["exact"])
-    doubt = None
+    doubt, advice = None, None
     if flags["error_bar"]:
-        bar, field = _error_bar(m, src, tgt, src.to_internal(ids_s), opts)
+        bar, coarse, Dt = _error_bar(m, src, tgt, src.to_internal(ids_s), opts)
         summary["error_bar"] = bar.to_dict()
         doubt = np.full(lines.size, np.nan)
-        doubt[src.ids] = field
-    return MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)), doubt)
+        doubt[src.ids] = bar.doubt[coarse.nearest]
+        advice = partial(suggest_landmarks, coarse, Dt, len(ids_s), bar.epsilon, bar.doubt, m.vertex_map, tgt.ids,
+                         seed=opts.seed)
+    result = MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)), doubt, advice)
+    if suggest:
+        result.suggest(suggest)  # recorded in the summary
+    return result
 
 
 def _inputs(source, target, ids_s, ids_t, flags):
@@ -149,9 +162,9 @@ def _bar_inputs(m, src, tgt, landmarks, opts):
 
 
 def _error_bar(m, src, tgt, landmarks, opts):
-    """``matching.error_bar.dense_error_bar`` on the matcher's samples."""
+    """``matching.error_bar.bar_and_samples`` on the matcher's samples."""
     source, solver = _bar_inputs(m, src, tgt, landmarks, opts)
-    return dense_error_bar(source, tgt, m.vertex_map, len(landmarks), opts.seed, solver)
+    return bar_and_samples(source, tgt, m.vertex_map, len(landmarks), opts.seed, solver)
 
 
 __all__ = ["match"]

@@ -220,12 +220,30 @@ class MatchResult(Pictures):
     drawing : (source Geometry, target Geometry, their landmarks as internal ids), for pictures.
     doubt : (n,) the error bar's doubt field at every source id (``matching.error_bar``; NaN for a
         dropped vertex), or None.
+    advice : callable k -> the k next landmarks (``matching.suggest.suggest_landmarks`` bound to this
+        match's bar), or None without an error bar; use ``suggest``.
     """
 
     map: np.ndarray
     summary: dict
     drawing: tuple = field(default=None, repr=False)
     doubt: np.ndarray | None = field(default=None, repr=False)
+    advice: object = field(default=None, repr=False)
+
+    def suggest(self, k: int = 1) -> list[dict]:
+        """The ``k`` next landmarks of this match, in order (``matching.suggest``): each its source id,
+        its provisional image's target id under the found map, the expected gain and the bar expected
+        after it.  Recorded in ``summary["suggestions"]`` and in the summary's ``verdict``."""
+        if self.advice is None:
+            raise InputError("suggesting landmarks reads the error bar: match two surfaces with error_bar=True")
+        out = [s.to_dict() for s in self.advice(k=k)]
+        self.summary["suggestions"] = out
+        if out:
+            self.summary["verdict"] = (f"click source vertex {out[0]['source_id']} next (provisional image "
+                                       f"{out[0]['image_id']}): the bar is expected to go from "
+                                       f"{self.summary['error_bar']['bar']:.3g} to {out[0]['bar_after']:.3g} "
+                                       "sqrt(area)")
+        return out
 
     def to_dict(self) -> dict:
         """The summary of ``shapecond match --json`` plus the map itself."""

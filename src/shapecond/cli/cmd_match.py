@@ -58,6 +58,9 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
 @NO_CACHE_OPTION
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
               help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
+@click.option("--suggest", type=Int(0, 1000), default=0, show_default=True,
+              help="Suggest this many next landmarks, read off the map and its error bar (each with its provisional "
+                   "image and the bar expected after it): click them, add them to the landmarks, re-run.")
 @click.option("--html", type=click.Path(dir_okay=False), default=None,
               help="Self-contained HTML page of the map: colours carried source -> target, linked landmarks.")
 @click.option("--truth", default=None,
@@ -77,15 +80,15 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
 
     if o["truth"] is not None and not o["html"]:
         raise InputError("--truth is shown by --html; give --html FILE too")
-    if (o["doubt_ply"] or o["doubt_png"]) and not o["error_bar"]:
-        raise InputError("--doubt-ply and --doubt-png show the error bar's doubt field: drop --no-error-bar")
+    if (o["doubt_ply"] or o["doubt_png"] or o["suggest"]) and not o["error_bar"]:
+        raise InputError("--doubt-ply, --doubt-png and --suggest read the error bar: drop --no-error-bar")
     t0 = time.perf_counter()
     lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
     result = match(source, target, parse_ids(landmarks_source, "--landmarks-source"),
                    parse_ids(landmarks_target, "--landmarks-target"), matcher=o["matcher"], n_points=o["points"],
                    seed=o["seed"], backend=o["geodesic_backend"], dense=o["dense"], samples=o["samples"],
                    cache=not o["no_cache"], force=o["force"], largest_component=o["largest_component"],
-                   error_bar=o["error_bar"], **lh05)
+                   error_bar=o["error_bar"], suggest=o["suggest"], **lh05)
     out = Path(output)
     with atomic_open(out) as fh:
         np.savetxt(fh, result.map, fmt="%d")
@@ -106,6 +109,9 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
              f"{summary['n_landmarks']} landmarks, {summary['seconds']:.1f} s)")
         if "error_bar" in summary:
             info("error bar: " + summary["error_bar"]["text"])
+        for i, s in enumerate(summary.get("suggestions", []), 1):
+            info(f"next landmark {i}: source {s['source_id']} (provisional image {s['image_id']}), "
+                 f"bar after it {s['bar_after']:.3g} sqrt(area)")
 
 
 def _write_doubt(result, path) -> None:

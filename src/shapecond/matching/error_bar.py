@@ -246,10 +246,18 @@ def dense_error_bar(source: SampledSurface, target_geometry, vertex_map, n_landm
     -------
     (ErrorBar, (n_source,) doubt of every source vertex from its nearest bar sample, sqrt(area) units)
     """
+    bar, coarse, _ = bar_and_samples(source, target_geometry, vertex_map, n_landmarks, seed, solver)
+    return bar, bar.doubt[coarse.nearest]
+
+
+def bar_and_samples(source: SampledSurface, target_geometry, vertex_map, n_landmarks: int, seed: int = 0,
+                    solver=None) -> tuple[ErrorBar, SampledSurface, np.ndarray]:
+    """``dense_error_bar``'s bar with the samples it was computed on and the target's distances between
+    their images (what ``suggest`` reads the next landmark off, without a new geodesic)."""
     t0 = time.perf_counter()
     coarse = bar_surface(source, n_landmarks)
     Ds, Dt = coarse.D, _sample_distances(coarse, target_geometry, np.asarray(vertex_map)[coarse.samples], solver)
     bar = replace(error_bar(coarse, n_landmarks, rms_distortion(Ds, Dt), seed,
                             epsilon_landmarks=landmark_distortion(Ds, Dt, n_landmarks)),
                   seconds=time.perf_counter() - t0)
-    return bar, bar.doubt[coarse.nearest]
+    return bar, coarse, Dt

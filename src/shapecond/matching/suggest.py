@@ -1,0 +1,136 @@
+"""The next landmark, read off a match: CNBS's greedy step run on the pair instead of the single shape.
+
+CNBS (paper Section 5) fixes, before any matching, the points of one shape
+whose fixing leaves its self-maps least confusable.  After a match the pair
+says more, and three things of it are at hand when the error bar has been
+computed (``error_bar``), on the bar's samples with no new geodesic:
+
+* the level ε of this pair (the map's own distortion, or the landmarks' when
+  larger), and at that level the **doubt** of every sample: how far the
+  widest map that fits the landmarks and distorts no more moves it;
+* where **the found map itself disagrees with the landmarks**: a part carried
+  to the wrong place has the wrong distances to them,
+  ``r(x) = sqrt(mean_l (D_s[x, l] − D_t[T x, T l])²)``, a lower bound of how far
+  ``T x`` is from an image that keeps those distances (triangle inequality),
+  inflated evenly where the two shapes differ;
+* the **evidence** ``e(x) = max(r(x) − ε, 0)``: the disagreement beyond the
+  pair's own level of distortion, where the map is visibly wrong.  ``r`` is a
+  lower bound of the error (under isometry) and the doubt an upper estimate
+  ("may be wrong by up to"); the two are not summed.
+
+A confirmed landmark at ``x`` pins the region of the samples nearer to ``x``
+than to every landmark so far (its cell, on the source's geodesics).  The
+expected gain of ``x`` is what its cell would take over, ``Σ_{y ∈ cell(x)}
+e(y) / N``: the mean error a correct correspondence there can remove if it
+repairs its cell, in the unit of the bar.  Evidence comes first: while some
+cell holds evidence the point of largest evidence gain is suggested; once
+none does (nothing visibly wrong), the point whose cell holds the most doubt
+(each point's doubt taken at least at the resolution h/2 of the samples, below
+which the bar claims nothing: on a map with no doubt left, the point farthest
+from the landmarks in the sense of the largest cell).
+The δ search is then repeated with the point fixed (one search at the same
+level: the bar expected after it, and the doubt that ranks the next point).
+Cells make the points spread by themselves (a point next to a landmark has an
+empty cell) without any radius.
+
+``CNBS-scale`` at the same ε is the source-only counterpart (``selection``):
+it ranks points by the doubt alone and needs a heat map of searches; here one
+search per suggested point, on the bar's ``BAR_SAMPLES`` samples.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..symmetry.scale import resolution, scale_score
+
+
+@dataclass(frozen=True)
+class Suggestion:
+    """One suggested landmark.
+
+    Attributes
+    ----------
+    vertex : internal source vertex.
+    source_id, image_id : the source's input id and its provisional image's input id under the found map.
+    gain : expected mean error removed (sqrt(area) units; module docstring).
+    suspicion : what ranked it at the point: its evidence, or its doubt when no cell held evidence.
+    bar_after : the error bar with this point (and the ones before it) fixed, at the same level.
+    """
+
+    vertex: int
+    source_id: int
+    image_id: int
+    gain: float
+    suspicion: float
+    bar_after: float
+
+    def to_dict(self) -> dict:
+        return {"source_id": self.source_id, "image_id": self.image_id, "gain": self.gain,
+                "suspicion": self.suspicion, "bar_after": self.bar_after}
+
+
+def landmark_disagreement(D_source, D_images, n_landmarks: int) -> np.ndarray:
+    """``r(x)`` of every sample (module docstring): RMS over the landmarks of the difference between its
+    distances to them and its image's distances to theirs."""
+    L = int(n_landmarks)
+    E = np.asarray(D_source)[:, :L] - np.asarray(D_images)[:, :L]
+    return np.sqrt(np.mean(E * E, axis=1))
+
+
+def cell_gains(D, fixed, suspicion) -> np.ndarray:
+    """Expected gain of fixing each sample: the suspicion of the samples nearer to it than to every fixed
+    sample, divided by the number of samples (module docstring); 0 for the fixed ones."""
+    D = np.asarray(D)
+    nearest_fixed = D[:, list(fixed)].min(axis=1)
+    gains = (D < nearest_fixed[:, None]).T.astype(np.float64) @ np.asarray(suspicion, dtype=np.float64)
+    gains /= D.shape[0]
+    gains[list(fixed)] = 0.0
+    return gains
+
+
+def suggest_landmarks(coarse, D_images, n_landmarks: int, epsilon: float, doubt, vertex_map, target_ids,
+                      k: int = 1, seed: int = 0) -> list[Suggestion]:
+    """The ``k`` next landmarks of a match, in order (module docstring).
+
+    Parameters
+    ----------
+    coarse : the bar's SampledSurface (landmarks first; ``error_bar.bar_surface``).
+    D_images : (n, n) the target's distances between the images of its samples, sqrt(area) units.
+    n_landmarks : landmarks among its first samples.
+    epsilon : the bar's level.
+    doubt : (n,) the bar's doubt field on its samples.
+    vertex_map : (n_source,) internal target vertex of every source vertex (the found map).
+    target_ids : input ids of the target's internal vertices.
+    k : how many points; seed : of the δ searches.
+    """
+    if not (isinstance(k, (int, np.integer)) and not isinstance(k, bool) and k >= 1):
+        raise InputError(f"the number of suggested landmarks must be a positive integer, got {k!r}")
+    D, n = coarse.D, coarse.n_samples
+    fixed = list(range(int(n_landmarks)))
+    if not fixed:
+        raise InputError("suggesting a next landmark needs at least one landmark")
+    r = landmark_disagreement(D, D_images, n_landmarks)
+    doubt = np.asarray(doubt, dtype=np.float64)
+    floor = resolution(D, n)
+    evidence = np.maximum(r - float(epsilon), 0.0)
+    out = []
+    for _ in range(min(int(k), n - len(fixed))):
+        gains = cell_gains(D, fixed, evidence)
+        s = evidence
+        if gains.max() <= 0:  # nothing visibly wrong: the doubt, never below what the samples resolve
+            s = np.maximum(doubt, floor)
+            gains = cell_gains(D, fixed, s)
+        x = int(np.argmax(gains))
+        if gains[x] <= 0:
+            break
+        fixed.append(x)
+        res = scale_score(D, n, fixed, epsilon, seed=seed, effort="quick")
+        doubt = D[np.arange(n), res.witness[:n]]
+        v = int(coarse.samples[x])
+        out.append(Suggestion(v, int(coarse.geometry.ids[v]), int(target_ids[int(vertex_map[v])]), float(gains[x]),
+                              float(s[x]), max(float(doubt.mean()), floor)))
+    return out
