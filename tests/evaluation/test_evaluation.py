@@ -166,7 +166,7 @@ def test_scheduler_without_dask_is_an_input_error(dataset, tmp_path, capsys):
 
 def test_landmark_selection_is_cached(dataset):
     args = ("strip", dataset / "strip" / "strip0.off", "fps", 4, ShapeSetup(30, 0, "heat", True), True)
-    from shapecond.shapes.metric import cache_dir
+    from shapecond.cache import cache_dir
 
     first = landmark_task(*args)
     cached = list(cache_dir().glob("landmarks-*.json"))

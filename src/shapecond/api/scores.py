@@ -23,7 +23,7 @@ from ..selection import check_method_options, select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
 from ..symmetry.report import ScoreSettings, score_report
 from ..symmetry.score import check_exact
-from .guards import guard_heat_map, guard_landmarks
+from .guards import guard_landmarks
 from .inputs import load, require_mesh, shape_of
 from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
