@@ -8,7 +8,8 @@ import pytest
 
 import shapecond
 
-MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.matching", "shapecond.api.level",
+MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.settings",
+           "shapecond.api.matching", "shapecond.api.level",
            "shapecond.evaluation.run", "shapecond.checks", "shapecond.jsonable", "shapecond.output",
            "shapecond.symmetry.verdict"]
 
