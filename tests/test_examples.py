@@ -14,7 +14,8 @@ MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.proble
            "shapecond.symmetry.verdict"]
 
 
-@pytest.mark.parametrize("name", MODULES)
+@pytest.mark.parametrize("name", [pytest.param(m, marks=pytest.mark.slow) if m == "shapecond.api.matching" else m
+                                  for m in MODULES])
 def test_examples_run(name, tmp_path, monkeypatch):
     monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path))
     result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)

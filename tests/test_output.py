@@ -115,7 +115,7 @@ WRITERS = {
 }
 
 
-@pytest.mark.parametrize("name", list(WRITERS))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "demo" else n for n in WRITERS])
 @pytest.mark.parametrize("tmpfile", [True, False], ids=["O_TMPFILE", "named temporary"])
 def test_a_symlink_planted_at_the_temporary_name_is_never_followed(tmp_path, capsys, monkeypatch, name, tmpfile):
     victim = tmp_path / "victim.txt"

@@ -29,7 +29,8 @@ def _match_files(d):
 
 #: name -> (arguments given a scratch folder, marks): every command and every ``cache`` sub-command.
 CASES = {
-    "score --upper": (lambda d: ["score", "demo:animal:delta=0.1", "-n", 12, "--target", "samples", "--upper"], ()),
+    "score --upper": (lambda d: ["score", "demo:animal:delta=0.1", "-n", 12, "--target", "samples", "--upper"],
+                      (pytest.mark.slow,)),
     "info": (lambda d: ["info", SMALL], ()),
     "sample": (lambda d: ["sample", SMALL, "-n", 12, "-o", d / "s.npz"], ()),
     "kappa": (lambda d: ["kappa", SMALL, "-n", 8, "--trials", 3], ()),

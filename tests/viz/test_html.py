@@ -102,6 +102,7 @@ def test_decimation_keeps_ids_and_says_so():
     assert data["n"] == small.n_vertices and any("decimated" in n for n in data["notes"])
 
 
+@pytest.mark.slow
 def test_a_50k_vertex_page_is_a_few_mb():
     g = generate("sphere", subdivisions=7)  # 163,842 vertices: decimated to 50k at most
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 0])])
