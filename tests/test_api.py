@@ -202,6 +202,26 @@ def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call,
         call()
 
 
+#: Distances of 8 points on a line, spaced unevenly (a matrix input: no geodesics to compute).
+NON_SYMMETRIC_8 = np.abs(np.subtract.outer(np.arange(8.0) ** 1.5, np.arange(8.0) ** 1.5))
+
+
+@pytest.mark.parametrize("bad,needle", [
+    ({"time_limit": -1}, "time_limit must be a finite number > 0"), ({"time_limit": 0}, "> 0, got 0"),
+    ({"time_limit": float("nan")}, "time_limit"), ({"upper": "no"}, "upper must be True or False"),
+    ({"upper": 1}, "upper must be True or False"), ({"exact": "yes"}, "exact must be 'auto', True or False"),
+    ({"epsilon": -0.1}, "epsilon must be a finite number >= 0"),
+], ids=["time_limit=-1", "time_limit=0", "time_limit=nan", "upper=no", "upper=1", "exact=yes", "epsilon<0"])
+def test_a_symmetry_problem_refuses_the_score_settings_sc_score_refuses(bad, needle):
+    """SymmetryProblem.score took time_limit=-1 and upper="no"; both scores now share one validator."""
+    with pytest.raises(InputError, match=re.escape(needle)) as one_off:
+        sc.score(NON_SYMMETRIC_8, **bad)
+    problem = sc.SymmetryProblem(NON_SYMMETRIC_8)
+    with pytest.raises(InputError) as kept:
+        problem.score(**bad)
+    assert str(kept.value) == str(one_off.value) and "0 searches kept" in repr(problem)  # before any work
+
+
 def test_lh05s_affinity_is_in_the_estimate_and_refused_before_the_geodesics(monkeypatch):
     """match cat0 cat0 -n 5000 warned '2 min', computed 33 s at 3.5 GB, then LH05 refused a 37 GB matrix."""
     from shapecond.limits import lh05_affinity_bytes

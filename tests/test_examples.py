@@ -8,12 +8,14 @@ import pytest
 
 import shapecond
 
-MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.matching", "shapecond.api.level",
+MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.settings",
+           "shapecond.api.matching", "shapecond.api.level",
            "shapecond.evaluation.run", "shapecond.checks", "shapecond.jsonable", "shapecond.output",
            "shapecond.symmetry.verdict"]
 
 
-@pytest.mark.parametrize("name", MODULES)
+@pytest.mark.parametrize("name", [pytest.param(m, marks=pytest.mark.slow) if m == "shapecond.api.matching" else m
+                                  for m in MODULES])
 def test_examples_run(name, tmp_path, monkeypatch):
     monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path))
     result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)

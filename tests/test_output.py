@@ -115,7 +115,7 @@ WRITERS = {
 }
 
 
-@pytest.mark.parametrize("name", list(WRITERS))
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n == "demo" else n for n in WRITERS])
 @pytest.mark.parametrize("tmpfile", [True, False], ids=["O_TMPFILE", "named temporary"])
 def test_a_symlink_planted_at_the_temporary_name_is_never_followed(tmp_path, capsys, monkeypatch, name, tmpfile):
     victim = tmp_path / "victim.txt"
@@ -233,3 +233,24 @@ def test_the_cache_folder_is_written_through_the_writer(tmp_path, monkeypatch):
     cache.save_arrays("x", "k" * 32, {"a": np.arange(3)})
     assert cache.load_arrays("x", "k" * 32, {"a": (3,)})["a"].tolist() == [0, 1, 2]
     assert sorted(p.name for p in tmp_path.iterdir()) == [cache.SECRET_NAME, f"x-{'k' * 32}.npz"]
+
+
+def test_what_a_compiled_library_writes_to_fd_1_is_diverted_and_python_stdout_is_kept():
+    script = textwrap.dedent("""
+        import ctypes, os, sys
+        from shapecond.output import stdout_fd_diverted
+        libc = ctypes.CDLL(None)
+        with stdout_fd_diverted(keep_python_stdout=True):
+            os.write(1, b"raw\\n")
+            libc.printf(b"c-stdio\\n")
+            print("python")
+            with stdout_fd_diverted(os.devnull):
+                os.write(1, b"dropped\\n")
+        print("after")
+        os.write(1, b"raw-after\\n")
+    """)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == "python\nafter\nraw-after\n"
+    assert proc.stderr == "raw\nc-stdio\n"

@@ -96,6 +96,3 @@ def search_seconds(n_samples: int, n_targets: int | None = None, searches: float
     m = 8 * n_samples if n_targets is None else n_targets
     return searches * SEARCH_SECONDS_400 * (n_samples / 400.0) ** 2 * (m / 3200.0)
 
-
-# BLAS-thread control lives in ``threads``; these names stay importable from here.
-from .threads import one_blas_thread, single_blas_thread  # noqa: E402,F401

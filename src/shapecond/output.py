@@ -29,6 +29,11 @@ by :func:`atomic_open`:
 * a failure (a full disk, no permission, a folder in the way) raises one
   :class:`~shapecond.errors.OutputError` naming the file.
 
+Standard output carries results only: :func:`stdout_fd_diverted` points file
+descriptor 1 elsewhere for a block, so that what a compiled library prints on
+its own stdout (HiGHS prints a banner when an instance is created, before any
+option can be set) cannot end up in front of the JSON of ``--json``.
+
 Examples
 --------
 >>> import tempfile, pathlib
@@ -43,12 +48,14 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import errno
 import io
 import os
 import re
 import secrets
 import stat
+import sys
 from pathlib import Path
 
 from .errors import InputError, OutputError
@@ -276,3 +283,55 @@ def write_text(path, text: str, make_parents: bool = True) -> Path:
     with atomic_open(path, "w", make_parents) as fh:
         fh.write(text)
     return Path(path)
+
+
+def _flush_c_stdio() -> None:
+    """Flush the C library's ``stdout`` buffer (text a compiled library printed but not written yet)."""
+    with contextlib.suppress(OSError, AttributeError, TypeError):
+        ctypes.CDLL(None).fflush(None)
+
+
+def _python_stdout_fd():
+    """File descriptor under ``sys.stdout`` (None when it has none, e.g. under pytest's ``capsys``)."""
+    try:
+        sys.stdout.flush()
+        return sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return None
+
+
+@contextlib.contextmanager
+def stdout_fd_diverted(to=None, keep_python_stdout: bool = False):
+    """Point file descriptor 1 at stderr (``to=None``) or at the file ``to`` (e.g. ``os.devnull``) for the block.
+
+    What a compiled library writes to its C ``stdout`` in the block goes there instead of standard
+    output.  With ``keep_python_stdout``, and when ``sys.stdout`` writes to descriptor 1, Python's
+    ``sys.stdout`` is given a copy of the original descriptor for the block: ``print`` and
+    ``click.echo`` still reach standard output, only writes below Python are diverted.  Nothing is
+    diverted when descriptor 1 cannot be duplicated (closed).
+    """
+    python_fd = _python_stdout_fd()
+    _flush_c_stdio()
+    try:
+        saved = os.dup(1)
+    except OSError:
+        yield
+        return
+    target = os.open(to, os.O_WRONLY | getattr(os, "O_CLOEXEC", 0)) if to is not None else 2
+    previous = sys.stdout
+    try:
+        os.dup2(target, 1)
+        if keep_python_stdout and python_fd == 1:
+            sys.stdout = io.TextIOWrapper(io.FileIO(saved, "w", closefd=False), encoding=previous.encoding,
+                                          errors=previous.errors, line_buffering=previous.line_buffering)
+        yield
+    finally:
+        if sys.stdout is not previous:
+            with contextlib.suppress(OSError, ValueError):
+                sys.stdout.flush()
+            sys.stdout = previous
+        _flush_c_stdio()
+        os.dup2(saved, 1)
+        os.close(saved)
+        if to is not None:
+            os.close(target)

@@ -98,6 +98,7 @@ def test_batch_on_a_cluster_gives_the_rows_of_a_local_run(shape_dir, broken_dir,
     same_rows(read_table(tmp_path / "local.parquet"), rows)
 
 
+@pytest.mark.slow
 def test_batch_starts_and_stops_its_own_local_cluster(shape_dir, tmp_path, capsys):
     status, out, err = run_cli(capsys, "batch", shape_dir / "blob0.off", shape_dir / "blob1.off",
                                "--points", "16", "--out", tmp_path / "t.jsonl", "--scheduler", "local:2", "--json")

@@ -9,7 +9,7 @@ from scipy.stats import spearmanr
 
 from shapecond.deformation.heatmap import exact_lambda, local_heatmap, select_local_landmarks
 from shapecond.deformation.local_score import LocalProblem
-from shapecond.deformation.solver import one_blas_thread
+from shapecond.threads import one_blas_thread
 from shapecond.errors import InputError
 from shapecond.shapes.synthetic import bumpy_blob, sphere
 

@@ -8,7 +8,7 @@ import scipy.linalg as sl
 
 from shapecond.deformation.local_score import (LocalProblem, local_score_of_geometry,
                                                local_symmetry_score)
-from shapecond.deformation.solver import one_blas_thread
+from shapecond.threads import one_blas_thread
 from shapecond.errors import InputError
 from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.synthetic import bumpy_blob, capped_cylinder, plane_patch, sphere, torus

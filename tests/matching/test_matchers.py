@@ -165,7 +165,7 @@ def test_matchers_on_two_different_samplings():
 
 
 def test_sparse_affinity_of_a_local_kernel_equals_the_dense_reference():
-    from shapecond.matching.refine import Kernel
+    from shapecond.matching.consistency import Kernel
 
     _, Ds = _planar(30, 5)
     Dt, truth = _permuted(Ds, 6)

@@ -5,6 +5,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.distance import cdist
 
+from shapecond.matching import consistency as C
 from shapecond.matching import refine as R
 from shapecond.matching.nested import CORE_LANDMARKS, core_size, with_landmarks
 from shapecond.matching.seeded import faq_match
@@ -28,7 +29,7 @@ def _deformed(n, seed, amp=0.25, noise=0.04):
 def _objective(matcher, Ds, Dt):
     if matcher == "lh05":
         kernel = fine_kernel(default_sigma(Ds, 1.0))
-        return lambda t: R.objective(Ds, Dt, t, kernel)
+        return lambda t: C.objective(Ds, Dt, t, kernel)
     return lambda t: float((Ds * Dt[np.ix_(t, t)]).sum())
 
 

@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.distance import cdist
 
+from shapecond.matching import consistency as C
 from shapecond.matching import refine as R
 from shapecond.matching.seeded import faq_match
 from shapecond.matching.spectral import default_sigma, fine_kernel, lh05_match
@@ -38,7 +39,7 @@ def _F(Ds, Dt, t, kernel):
     return sum(_K(kernel, Ds[x, y], Dt[t[x], t[y]]) for x in range(n) for y in range(n) if x != y)
 
 
-KERNELS = [R.Kernel(0.3), R.Kernel(0.2, 0.1), R.Kernel(0.15, 0.0, 0.4)]
+KERNELS = [C.Kernel(0.3), C.Kernel(0.2, 0.1), C.Kernel(0.15, 0.0, 0.4)]
 
 
 @settings(max_examples=15, deadline=None)
@@ -46,18 +47,18 @@ KERNELS = [R.Kernel(0.3), R.Kernel(0.2, 0.1), R.Kernel(0.15, 0.0, 0.4)]
 def test_objective_and_gain_equal_their_definitions(seed, kernel):
     Ds, Dt, _ = _instance(9, seed, noise=0.05)
     t = np.random.default_rng(seed).permutation(9)
-    assert R.objective(Ds, Dt, t, kernel) == pytest.approx(_F(Ds, Dt, t, kernel), rel=1e-9, abs=1e-12)
+    assert C.objective(Ds, Dt, t, kernel) == pytest.approx(_F(Ds, Dt, t, kernel), rel=1e-9, abs=1e-12)
     for x, y in ((0, 3), (4, 4), (8, 1)):
         want = sum(_K(kernel, Ds[x, xp], Dt[y, t[xp]]) for xp in range(9) if xp != x)
-        assert R.gain(Ds, Dt, t, x, y, kernel) == pytest.approx(want, rel=1e-9, abs=1e-12)
+        assert C.gain(Ds, Dt, t, x, y, kernel) == pytest.approx(want, rel=1e-9, abs=1e-12)
 
 
 def test_biweights_agree_with_gaussians_to_second_order():
-    k = R.Kernel(1.0, 0.0, 1.0)
+    k = C.Kernel(1.0, 0.0, 1.0)
     for small in (1e-3, 1e-2):
         # φ(u) w(d) ≈ exp(-u²/2) exp(-d²/(2R²)) up to fourth-order terms
         assert _K(k, small, 0.0) == pytest.approx(math.exp(-small ** 2), abs=10 * small ** 4)
-    assert _K(k, 2.0, 2.0) == 0.0 and _K(R.Kernel(1.0), 3.0, 0.5) == 0.0
+    assert _K(k, 2.0, 2.0) == 0.0 and _K(C.Kernel(1.0), 3.0, 0.5) == 0.0
 
 
 @settings(max_examples=12, deadline=None)
@@ -87,7 +88,7 @@ def _brute_force_swaps(Ds, Dt, t, knn, free, kernel, max_moves):
     t = t.copy()
     inv = np.argsort(t)
     for move in range(max_moves):
-        f = R.objective(Ds, Dt, t, kernel)
+        f = C.objective(Ds, Dt, t, kernel)
         best, pair = 1e-9, None
         for a in free:
             for y in knn[t[a]]:
@@ -95,7 +96,7 @@ def _brute_force_swaps(Ds, Dt, t, knn, free, kernel, max_moves):
                 if b != a and b in free:
                     s = t.copy()
                     s[a], s[b] = s[b], s[a]
-                    gain = R.objective(Ds, Dt, s, kernel) - f
+                    gain = C.objective(Ds, Dt, s, kernel) - f
                     if gain > best:
                         best, pair = gain, (a, b)
         if pair is None:
@@ -107,7 +108,7 @@ def _brute_force_swaps(Ds, Dt, t, knn, free, kernel, max_moves):
 
 
 @settings(max_examples=12, deadline=None)
-@given(st.integers(0, 10_000), st.sampled_from(KERNELS + [R.Kernel(0.1, 0.0, 0.15)]))
+@given(st.integers(0, 10_000), st.sampled_from(KERNELS + [C.Kernel(0.1, 0.0, 0.15)]))
 def test_swap_search_makes_the_moves_of_a_full_rescan(seed, kernel):
     # the swap search rescans only the samples a move can affect: the same moves as
     # recomputing every gain (short bands: some gains summed outside them; a kernel
@@ -122,7 +123,7 @@ def test_swap_search_makes_the_moves_of_a_full_rescan(seed, kernel):
     for max_moves in (3, 50 * n):
         want, moves = _brute_force_swaps(Ds, Dt, t0, knn, set(free.tolist()), kernel, max_moves)
         t = t0.astype(np.int64)
-        lists = R._Lists(knn, R.rank_table(knn), R.support_lists(Ds, p[3]))
+        lists = R._Lists(knn, R.rank_table(knn), C.support_lists(Ds, p[3]))
         got = R._swap_search(Ds, Dt, t, lists, isfree, p, max_moves)
         assert got == moves and np.array_equal(t, want)
 
@@ -144,8 +145,8 @@ def test_lh05_reports_its_objective_and_beats_the_truth_on_an_isometry(seed):
     ls = [0, 1, 2]
     m = lh05_match(Ds, Dt, ls, truth[ls], k=10)
     kern = fine_kernel(default_sigma(Ds))
-    assert m.info["objective"] == pytest.approx(R.objective(Ds, Dt, m.t, kern), rel=1e-9)
-    assert m.info["objective"] >= R.objective(Ds, Dt, truth, kern) - 1e-9
+    assert m.info["objective"] == pytest.approx(C.objective(Ds, Dt, m.t, kern), rel=1e-9)
+    assert m.info["objective"] >= C.objective(Ds, Dt, truth, kern) - 1e-9
     assert np.array_equal(m.t, truth)
 
 
@@ -174,14 +175,14 @@ def test_compiled_gain_tables_equal_the_gain_entries(seed, kernel):
     p = kernel.params()
     rows = np.arange(1, 12)
     img = t[rows]
-    entries = np.array([[R._gain_entry(Ds, Dt, t, x, y, p) for y in img] for x in rows])
-    band = R._gain_band(Ds, Dt, t, rows, np.ascontiguousarray(np.broadcast_to(img, (rows.size, img.size))), p)
-    cols = R._gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, rows, p)
+    entries = np.array([[C._gain_entry(Ds, Dt, t, x, y, p) for y in img] for x in rows])
+    band = C._gain_band(Ds, Dt, t, rows, np.ascontiguousarray(np.broadcast_to(img, (rows.size, img.size))), p)
+    cols = C._gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, rows, p)
     assert np.array_equal(cols, band)
     assert np.allclose(band, entries, rtol=1e-12, atol=1e-15)
-    near = R.support_lists(Ds, p[3])
-    terms, buf = R._support_terms(Ds, near, p), np.empty(near.shape[1])
-    assert np.array_equal([[R._gain_near(Dt, t, near, terms, x, y, buf) for y in img] for x in rows],
+    near = C.support_lists(Ds, p[3])
+    terms, buf = C._support_terms(Ds, near, p), np.empty(near.shape[1])
+    assert np.array_equal([[C._gain_near(Dt, t, near, terms, x, y, buf) for y in img] for x in rows],
                           entries)
 
 

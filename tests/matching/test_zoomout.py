@@ -77,6 +77,7 @@ def test_a_map_that_does_not_fit_is_an_input_error(blob):
         ZoomOutOptions(k_start=0).levels(50)
 
 
+@pytest.mark.slow
 def test_the_zoomout_matcher_keeps_the_least_distorted_of_its_starts(blob, monkeypatch):
     """With more than 3 landmarks it also starts from the first 3 landmarks' descriptions and keeps the map
     that distorts the sample distances less: a start spoiled by the extra landmarks costs nothing."""

@@ -140,3 +140,20 @@ def test_time_limit_gives_inf_rather_than_an_unproven_value():
     D = random_instance(np.random.default_rng(0), 12, 2)
     lp = lp_upper_bound(D, time_limit=1e-3)
     assert lp.upper == math.inf and lp.status == "time-limit"
+
+
+def test_the_lp_prints_nothing_on_stdout():
+    """highspy 1.16 prints a banner on file descriptor 1 when a Highs instance is made, before any
+    option can be set; it came out in front of ``score --upper --json``.  HiGHS prints it once per
+    process, hence a fresh one."""
+    import os
+    import subprocess
+    import sys
+
+    script = ("import sys; import numpy as np; from shapecond.symmetry.relax import lp_upper_bound; "
+              "from tests.helpers import random_instance; "
+              "print(lp_upper_bound(random_instance(np.random.default_rng(0), 6, 2)).status, file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert proc.returncode == 0 and proc.stderr.strip() == "optimal", proc.stderr
+    assert proc.stdout == ""

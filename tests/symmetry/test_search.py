@@ -47,6 +47,7 @@ def test_landmarks_are_fixed_and_bound_matches_enumeration():
         assert res.sigma <= witness_search(D, seed=k).sigma * (1 + 1e-12)  # landmarks only lower σ
 
 
+@pytest.mark.slow
 def test_dense_targets_against_injective_enumeration():
     """Dense targets: the search over injective maps of N <= 6 samples into M <= 10 targets against
     enumeration."""

@@ -8,10 +8,12 @@ import pytest
 import trimesh
 
 from shapecond.errors import InputError
-from shapecond.viz.heatmap import interpolate_to_vertices, render_heatmap_png
+from shapecond.symmetry.starts import classical_mds
+from shapecond.viz.heatmap import render_heatmap_png
 from shapecond.viz.ply import write_ply
 from shapecond.viz.render import render_png, view_rotation
-from shapecond.viz.witness import classical_mds, render_witness_png
+from shapecond.viz.scene import interpolate_to_vertices
+from shapecond.viz.witness import render_witness_png
 
 
 @pytest.fixture(scope="module")

@@ -13,6 +13,7 @@ every door.
   Section 6), ``heatmap`` (Figures 1 and 4), ``kappa`` (probes of Eq. 4);
 * ``problem``: ``SymmetryProblem``, one shape whose searches are kept for
   repeated queries;
+* ``settings``: ``score_settings``, the checked settings of both kinds of score;
 * ``matching``: ``match``, a dense map between two shapes guided by landmarks;
 * ``level``: ``deformation_level``, the distortion level ε̂ of a shape against
   others, read off matched maps (the ε of ``score``, ``landmarks``, ``heatmap``);

@@ -10,14 +10,14 @@ import numpy as np
 from ..checks import check_choice, check_float, check_int, check_seed, parse_ids
 from ..selection import check_method_options, select_landmarks
 from ..selection.cnbs import RESOLVE_FRACTION, heat_map
-from ..symmetry.report import ScoreSettings, score_report
+from ..symmetry.report import score_report
 from ..symmetry.scale import budget_of, default_epsilon
-from ..symmetry.score import check_exact
 from ..symmetry.search import witness_search
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import shape_of
 from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, LandmarkResult, ScoreResult, promote
+from .settings import score_settings
 
 
 class SymmetryProblem:
@@ -81,11 +81,8 @@ class SymmetryProblem:
         """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search."""
         refuse_unknown(unknown, "SymmetryProblem.score")
         ids = parse_ids(landmarks)
-        check_exact(exact)
-        if epsilon is not None:
-            epsilon = check_float(epsilon, "epsilon", lo=0.0)
-        settings = ScoreSettings(exact=exact, upper=upper, time_limit=time_limit, seed=self.seed, effort=self.effort,
-                                 force=self.force, epsilon=epsilon)
+        settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=self.effort,
+                                  epsilon=epsilon, seed=self.seed, force=self.force)
         report = score_report(self.shape, ids, settings, search=self.search(ids))
         return promote(report, ScoreResult)
 

@@ -16,17 +16,17 @@ import time
 
 import numpy as np
 
-from ..checks import check_choice, check_flag, check_float, check_int, parse_ids
+from ..checks import check_choice, check_float, check_int, parse_ids
 from ..deformation.local_score import ZERO_TOL, LocalProblem
 from ..errors import InputError
 from ..selection import check_method_options, select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
-from ..symmetry.report import ScoreSettings, score_report
-from ..symmetry.score import check_exact
-from .guards import guard_heat_map, guard_landmarks
+from ..symmetry.report import score_report
+from .guards import guard_landmarks
 from .inputs import load, require_mesh, shape_of
 from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
+from .settings import score_settings
 
 #: Largest N of κ probes beyond the landmarks (exact matching enumerates every map).
 DEFAULT_KAPPA_POINTS = 8
@@ -64,18 +64,11 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     True
     """
     opts, _ = ShapeOptions.take(options, "score")
-    check_exact(exact)
-    settings = _score_settings(upper, time_limit, effort, epsilon)
+    settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=effort, epsilon=epsilon,
+                              seed=opts.seed, force=opts.force)
     shape = shape_of(x, n_points, landmarks, opts)
-    report = score_report(shape, parse_ids(landmarks),
-                          ScoreSettings(exact=exact, seed=opts.seed, force=opts.force, **settings))
+    report = score_report(shape, parse_ids(landmarks), settings)
     return promote(report, ScoreResult)
-
-
-def _score_settings(upper, time_limit, effort, epsilon) -> dict:
-    return dict(upper=check_flag(upper, "upper"), effort=check_choice(effort, "effort", EFFORTS),
-                time_limit=None if time_limit is None else check_float(time_limit, "time_limit", lo=0.0, lo_open=True),
-                epsilon=None if epsilon is None else check_float(epsilon, "epsilon", lo=0.0))
 
 
 def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs", zero_tol: float | None = None,

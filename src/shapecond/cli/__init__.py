@@ -4,7 +4,10 @@ Sub-commands live in ``shapecond/cli/cmd_*.py``, each exporting a click command
 named ``command``; they are discovered here and imported when used.  Every user error (``InputError``,
 a bad option) becomes one ``error: ...`` line on stderr and exit status 2; any
 other failure is internal (exit status 1; set ``SHAPECOND_DEBUG=1`` for the
-traceback).
+traceback).  Standard output carries what the commands print and nothing else:
+while a command runs, file descriptor 1 points at stderr and only Python's
+``sys.stdout`` keeps the real standard output (``output.stdout_fd_diverted``),
+so what a compiled library prints on its own can never corrupt ``--json``.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import click
 
 from .._version import __version__
 from ..errors import ShapecondError
+from ..output import stdout_fd_diverted
 
 
 class _LazyGroup(click.Group):
@@ -65,7 +69,8 @@ def main(argv=None) -> None:
     """Console-script entry point."""
     warnings.showwarning = _one_line_warning
     try:
-        status = cli.main(args=argv, prog_name="shapecond", standalone_mode=False)
+        with stdout_fd_diverted(keep_python_stdout=True):  # a compiled library's prints go to stderr
+            status = cli.main(args=argv, prog_name="shapecond", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as exc:  # bare `shapecond` or `shapecond CMD`: show help
         click.echo(exc.ctx.get_help() if exc.ctx else str(exc))
         sys.exit(0)

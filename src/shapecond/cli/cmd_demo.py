@@ -22,7 +22,8 @@ import numpy as np
 
 from ..api import landmarks, load, metric_shape, score
 from ..errors import InputError
-from .common import SEED, Float, Int, emit_json, fmt, force_option, info, json_option, progress_enabled
+from ..jsonable import fmt
+from .common import SEED, Float, Int, emit_json, force_option, info, json_option, progress_enabled
 
 
 def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:

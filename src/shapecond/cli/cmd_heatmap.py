@@ -5,11 +5,13 @@ from __future__ import annotations
 import click
 
 from ..api import heatmap
+from ..checks import parse_ids
 from ..errors import InputError
+from ..jsonable import fmt
 from ..selection.cnbs import RESOLVE_FRACTION
 from .cmd_landmarks import _up
-from .common import (IDS_HELP, Float, api_options, emit_json, fmt, info, json_option, parse_ids, pop_shape_options,
-                     shape_options, epsilon_options, resolve_epsilon)
+from .common import (IDS_HELP, Float, api_options, emit_json, info, json_option, pop_shape_options, shape_options,
+                     epsilon_options, resolve_epsilon)
 
 
 @click.command("heatmap")

@@ -11,8 +11,9 @@ from __future__ import annotations
 import click
 
 from ..api import kappa
-from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
-                     pop_shape_options, shape_options)
+from ..checks import parse_ids
+from ..jsonable import fmt
+from .common import IDS_HELP, Float, Int, api_options, emit_json, info, json_option, pop_shape_options, shape_options
 
 
 @click.command("kappa")

@@ -5,9 +5,11 @@ from __future__ import annotations
 import click
 
 from ..api import landmarks
+from ..checks import parse_ids
+from ..jsonable import fmt
 from ..selection import METHODS, SCORES
-from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
-                     pop_shape_options, shape_options, epsilon_options, resolve_epsilon)
+from .common import (IDS_HELP, Int, api_options, emit_json, info, json_option, pop_shape_options, shape_options,
+                     epsilon_options, resolve_epsilon)
 
 
 @click.command("landmarks")

@@ -11,9 +11,10 @@ from dataclasses import replace
 import click
 
 from ..api import local_score
+from ..checks import parse_ids
 from ..deformation.energy import ALPHA_RANGE, DEFAULT_ALPHA, ENERGIES
 from ..deformation.local_score import ZERO_TOL
-from .common import IDS_HELP, Float, emit_json, force_option, info, json_option, parse_ids
+from .common import IDS_HELP, Float, emit_json, force_option, info, json_option
 
 
 @click.command("local")

@@ -12,10 +12,11 @@ import click
 import numpy as np
 
 from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLINGS
+from ..checks import parse_ids
 from ..errors import InputError
 from ..output import atomic_open
 from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, SEED_OPTION, Int, emit_json,
-                     force_option, info, json_option, parse_ids, points_option)
+                     force_option, info, json_option, points_option)
 
 
 @click.command("match")

@@ -9,9 +9,10 @@ import click
 import numpy as np
 
 from ..api import metric_shape
+from ..checks import parse_ids
 from ..errors import InputError
 from ..output import write_bytes
-from .common import IDS_HELP, api_options, emit_json, info, json_option, parse_ids, pop_shape_options, shape_options
+from .common import IDS_HELP, api_options, emit_json, info, json_option, pop_shape_options, shape_options
 
 
 @click.command("sample")

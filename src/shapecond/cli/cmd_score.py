@@ -17,8 +17,10 @@ import click
 import numpy as np
 
 from ..api import score
-from .common import IDS_HELP, Float, api_options, emit_json, epsilon_options, fmt, info, json_option, parse_ids, \
-    pop_shape_options, resolve_epsilon, shape_options
+from ..checks import parse_ids
+from ..jsonable import fmt
+from .common import (IDS_HELP, Float, api_options, emit_json, epsilon_options, info, json_option, pop_shape_options,
+                     resolve_epsilon, shape_options)
 
 
 @click.command("score")

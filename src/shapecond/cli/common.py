@@ -11,17 +11,14 @@ the Python functions.
 
 from __future__ import annotations
 
-import math
 import sys
-from pathlib import Path
 
 import click
-import numpy as np
 
 from ..api import DEFAULT_POINTS
-from ..checks import check_float, check_int, check_seed, parse_ids  # noqa: F401  (parse_ids: the commands')
+from ..checks import check_float, check_int, check_seed
 from ..errors import InputError
-from ..jsonable import dumps, fmt  # noqa: F401  (fmt: the commands' one number format)
+from ..jsonable import dumps
 #: How vertex ids are given, for the help of every ids option (``checks.parse_ids``, ``checks.read_ids``).
 IDS_HELP = ("comma- or space-separated (12,405,877) or a file of ids: every id on every line (1 2 3, 1,2,3 "
             "or one per line; # comments); a BIM .pid line 'ID 0 0 0' gives ID; fractional ids are refused")

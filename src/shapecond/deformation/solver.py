@@ -31,7 +31,7 @@ import scipy.sparse.linalg as sla
 
 from .. import cholesky
 from ..errors import InputError
-from ..limits import one_blas_thread
+from ..threads import one_blas_thread
 
 SHIFT = 1e-5  # relative to the proximity stiffness 2 of the unit-area mesh
 BACKENDS = ("cholmod", "superlu")

@@ -25,7 +25,7 @@ from dataclasses import dataclass, fields
 
 from .._options import with_options
 from ..errors import InputError
-from ..limits import single_blas_thread
+from ..threads import single_blas_thread
 from .fps import fps_landmarks
 from .pls import pls_landmarks
 from .result import LandmarkSelection, make_result, sample_of_vertex

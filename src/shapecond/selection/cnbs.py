@@ -71,7 +71,7 @@ pictures), ``CHUNK`` candidates are searched at once, each drawing its kicks fro
 generator seeded by the seed and the candidate.  No result depends on the thread count.
 
 Everything is deterministic given ``seed``, whatever the number of BLAS threads: the
-entry points run with one (``limits.single_blas_thread``), since a threaded product
+entry points run with one (``threads.single_blas_thread``), since a threaded product
 sums in another order and the greedy follows near-ties of such sums.
 """
 
@@ -86,7 +86,7 @@ import numpy as np
 from .._options import merge_options, with_options
 from ..checks import check_landmark_count
 from ..errors import InputError
-from ..limits import single_blas_thread
+from ..threads import single_blas_thread
 from ..symmetry.objective import isometry_floor, swap_terms
 from ..symmetry.scale import resolution
 from ..symmetry.search import witness_search

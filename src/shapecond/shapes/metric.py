@@ -15,12 +15,11 @@ hash of the geometry and of every parameter, and checked when read;
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import cache as disk
-from ..cache import cache_dir  # noqa: F401  (the cache folder, long imported from here)
 from ..checks import check_distance_matrix, check_int, check_seed
 from ..errors import InputError
 from ..limits import check_cost, geodesic_seconds, metric_bytes

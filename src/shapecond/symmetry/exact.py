@@ -31,7 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import TooLargeError
-from ..limits import human_bytes, one_blas_thread
+from ..limits import human_bytes
+from ..threads import one_blas_thread
 from . import objective
 from ._result import FieldsToDict
 from ._bnb import branch_and_bound, ratio_of, swap_search

@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 import time
 from dataclasses import dataclass
 
@@ -73,6 +74,7 @@ import scipy.sparse as sp
 import highspy
 
 from ..errors import TooLargeError
+from ..output import stdout_fd_diverted
 from . import objective
 from ._result import FieldsToDict
 from .objective import check_instance
@@ -284,8 +286,10 @@ def _highs_model(c, A_eq, b_eq, A_ub, b_ub):
     """A HiGHS instance holding the LP ``min c·z, A_eq z = b_eq, A_ub z <= b_ub, z >= 0`` at the
     tolerances of the module docstring; returns it with its number of rows."""
     A = sp.vstack([A_eq, A_ub]).tocsc()
-    h = highspy.Highs()
+    with stdout_fd_diverted(os.devnull):  # highspy 1.16 prints its banner on fd 1 when the instance is made
+        h = highspy.Highs()
     h.setOptionValue("output_flag", False)
+    h.setOptionValue("log_to_console", False)
     h.setOptionValue("primal_feasibility_tolerance", 1e-9)
     h.setOptionValue("dual_feasibility_tolerance", 1e-9)
     lp = highspy.HighsLp()

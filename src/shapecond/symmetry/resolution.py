@@ -46,7 +46,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from shapecond.jsonable import jsonable
-from shapecond.limits import one_blas_thread, search_seconds
+from shapecond.limits import search_seconds
+from shapecond.threads import one_blas_thread
 from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry.search import (DENSE_K, EFFORTS, MapPool, SearchResult, SearchStage, prepare_instance,

@@ -44,7 +44,7 @@ from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
 from shapecond.symmetry import starts as S
 
-from shapecond.limits import one_blas_thread
+from shapecond.threads import one_blas_thread
 from shapecond.threads import n_threads, thread_map
 
 #: Work per effort level: MDS coordinates / reflection starts kept, spectral vectors / sign pairs / starts polished,

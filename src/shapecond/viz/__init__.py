@@ -14,9 +14,9 @@
 """
 
 from .heatmap import render_heatmap_png
-from .scene import interpolate_to_vertices
+from .scene import DEFAULT_VIEWS, interpolate_to_vertices
 from .ply import write_ply
-from .render import DEFAULT_VIEWS, render_png, render_rows
+from .render import render_png, render_rows
 from .witness import render_witness_png
 
 __all__ = ["DEFAULT_VIEWS", "interpolate_to_vertices", "render_heatmap_png", "render_png",

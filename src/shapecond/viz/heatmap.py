@@ -19,7 +19,7 @@ import numpy as np
 
 from .ply import write_ply
 from .render import render_scene
-from .scene import DEFAULT_VIEWS, heatmap_scene, interpolate_to_vertices, shape_points  # noqa: F401
+from .scene import heatmap_scene, shape_points
 
 
 def render_heatmap_png(shape, values, path, *, landmarks=(), ply: str | None = None, fig=None, **style):

@@ -18,9 +18,8 @@ The picture's render data is ``scene.witness_scene`` (the HTML viewer shows the 
 
 from __future__ import annotations
 
-from ..symmetry.starts import classical_mds  # noqa: F401  (imported from here by the tests)
 from .render import render_scene
-from .scene import DEFAULT_VIEWS, position_colours, witness_scene  # noqa: F401
+from .scene import witness_scene
 
 
 def render_witness_png(shape, witness, path, *, landmarks=(), fig=None, **options):
