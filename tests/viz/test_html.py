@@ -300,3 +300,106 @@ def test_browser_jupyter_inline_view(browser, tmp_path, heat):
                             timeout=20_000)
     assert frame.evaluate("window.shapecond.error") is None and frame.evaluate("window.shapecond.viewers.length") == 1
     assert not errors
+
+
+# --- picking landmarks on the match page, suggestions, the up direction -----------------------------
+
+@pytest.fixture(scope="module")
+def pair_result():
+    return sc.match(SMALL, "demo:animal:resolution=0.05,delta=0.1", [0, 50, 300], [0, 50, 300], matcher="faq",
+                    n_points=20, cache=False, error_bar=False)
+
+
+PATHS = dict(source="my shapes/a.off", target="b.off", output="map.txt", html="page.html")
+
+
+def test_match_page_knows_the_command_and_the_suggestions(pair_result, tmp_path):
+    src, tgt = pair_result.drawing[:2]
+    document = pages.result_page(pair_result, command=PATHS, suggestions=[(7, "bar after: 0.021"), (90, None)])
+    data = _data(document)[0]
+    p = data["picking"]
+    assert (p["source"], p["target"], p["output"], p["html"]) == ("'my shapes/a.off'", "b.off", "map.txt", "page.html")
+    assert p["pairs"] == [[0, 0], [50, 50], [300, 300]] and p["placeholders"] == []
+    shown = [(s["label"], s["id"], s["note"]) for s in data["suggestions"]]
+    assert shown == [("S1", int(src.ids[7]), "bar after: 0.021"), ("S2", int(src.ids[90]), "")]
+    bare = _data(pages.result_page(pair_result))[0]
+    assert bare["picking"]["source"] == "SOURCE" and "html" in bare["picking"]["placeholders"]
+    assert bare["suggestions"] == []
+    for bad in (dict(command=dict(sorce="a.off")), dict(suggestions=[(src.n_vertices, "x")]),
+                dict(suggestions=[(-1, "x")]), dict(suggestions=[(1.5, "x")])):
+        with pytest.raises(InputError):
+            pages.result_page(pair_result, **bad)
+
+
+def test_match_page_stands_shapes_upright(pair_result):
+    import base64
+
+    from shapecond.shapes.validate import make_geometry
+
+    src, tgt = pair_result.drawing[:2]
+    lying = [make_geometry(g.vertices[:, [0, 2, 1]] * [1, -1, 1], g.faces, name=g.name) for g in (src, tgt)]  # z up
+    vmap = np.arange(src.n_vertices)
+    for shapes in ((src, tgt), lying):
+        data = _data(pages.match_page(*shapes, vmap))[0]
+        P = np.frombuffer(base64.b64decode(data["positions"]), np.float32).reshape(-1, 3)[: src.n_vertices]
+        low = np.argsort(P[:, 2])[:20]                   # the source's lowest display points: its paws
+        assert np.all(src.vertices[low, 1] < src.vertices[:, 1].min() + 0.1 * np.ptp(src.vertices[:, 1]))
+
+
+def _visible(page, data: dict, part: int, avoid=()) -> int:
+    """A display vertex of ``part`` near the camera of view 0 that nothing hides (the first of those the
+    viewer finds all around its screen position, so that a click there cannot miss it), away from the
+    vertices ``avoid``."""
+    import base64
+
+    P = np.frombuffer(base64.b64decode(data["positions"]), np.float32).reshape(-1, 3)
+    _, lo, hi = data["parts"][part]
+    depth = P[lo:hi] @ view_rotation(*data["views"][0])[2]
+    far = np.ptp(P[lo:hi], axis=0).max() * 0.2
+    for i in avoid:
+        depth[np.linalg.norm(P[lo:hi] - P[i], axis=1) < far] = -np.inf
+    for i in lo + np.argsort(-depth, kind="stable")[:200]:  # found under every pixel within 1.5 px
+        if page.evaluate(f"(v => {{ const p = v.screenOf({i}); return [-1.5, 0, 1.5].flatMap(dx => [-1.5, 0, 1.5]"
+                         f".map(dy => v.vertexAt(p.x + dx, p.y + dy))).every(j => j === {i}); }})"
+                         "(window.shapecond.viewers[0])"):
+            return int(i)
+    raise AssertionError("no visible vertex")
+
+
+def test_browser_match_page_picks_landmarks(browser, tmp_path, pair_result):
+    import shlex
+    from urllib.parse import unquote
+
+    path = Path(pair_result.to_html(tmp_path / "pick.html", command=PATHS, suggestions=[(7, "bar after: 0.021")]))
+    page, errors, requests = _open(browser, path)
+    _check(page, errors, requests, path)
+    data = _data(path.read_text())[0]
+    s1, t1 = _visible(page, data, 0), _visible(page, data, 1)
+    s2, t2 = _visible(page, data, 0, [s1]), _visible(page, data, 1, [t1])
+    viewer = "window.shapecond.viewers[0]"
+
+    def click(i):
+        xy = page.evaluate(f"{viewer}.screenOf({i})")
+        page.mouse.click(xy["x"], xy["y"])
+
+    click(t1)  # a target first: nothing added
+    assert "source vertex first" in page.locator(".sc-pick-state").inner_text()
+    for i in (s1, t1, s2, t2):
+        click(i)
+    words = shlex.split(page.locator(".sc-command").inner_text())
+    ids = [_id(data, i) for i in (s1, t1, s2, t2)]
+    assert words[:4] == ["shapecond", "match", "my shapes/a.off", "b.off"]
+    assert words[4:] == ["--landmarks-source", f"0,50,300,{ids[0]},{ids[2]}", "--landmarks-target",
+                         f"0,50,300,{ids[1]},{ids[3]}", "-o", "map.txt", "--html", "page.html"]
+    href = page.locator("a.sc-file").nth(1).get_attribute("href")
+    assert unquote(href.split(",", 1)[1]) == f"0,50,300,{ids[1]},{ids[3]}\n"
+    assert page.locator("a.sc-file").nth(0).get_attribute("download") == "landmarks_source.txt"
+    page.locator("button.sc-undo").click()
+    assert page.locator(".sc-command").get_attribute("data-target-ids") == f"0,50,300,{ids[1]}"
+    page.locator(".sc-suggestion").click()  # a suggestion picks its source vertex
+    assert "now click its target" in page.locator(".sc-pick-state").inner_text()
+    assert page.evaluate(f"{viewer}.extra.length") == 1 + 2 + 1  # the suggestion, one pair, the pending pick
+    page.locator("button.sc-copy").click()
+    assert "copied" in page.locator(".sc-pick-state").inner_text() or "selected" in page.locator(
+        ".sc-pick-state").inner_text()
+    assert not errors, errors

@@ -138,3 +138,27 @@ def test_classical_mds_recovers_distances():
     D = np.linalg.norm(X[:, None] - X[None], axis=2)
     Y = classical_mds(D)
     assert np.allclose(np.linalg.norm(Y[:, None] - Y[None], axis=2), D, atol=1e-8)
+
+
+def rotations(g):
+    """The generated animal (y up) turned so that y, z and -y are up."""
+    V = np.asarray(g.vertices, float)
+    return {"y": V, "z": V[:, [0, 2, 1]] * [1, -1, 1], "-y": V * [1, -1, -1]}
+
+
+def test_guess_up_finds_the_feet_whatever_the_axis():
+    from shapecond.shapes.synthetic import generate
+    from shapecond.viz.scene import guess_up, up_frame
+
+    g = generate("animal", resolution=0.05)
+    for up, V in rotations(g).items():
+        shape = SimpleNamespace(vertices=V, faces=g.faces)
+        assert guess_up(shape) == up and guess_up(shape, shape) == up
+        D = (V - V.mean(axis=0)) @ up_frame(up, V).T
+        feet = np.argsort(D[:, 2])[:20]                 # drawn upright: the lowest points are the paws,
+        assert np.all(g.vertices[feet, 1] < g.vertices[:, 1].min() + 0.1 * np.ptp(g.vertices[:, 1]))
+        cloud = SimpleNamespace(vertices=V, faces=None)  # a point cloud too
+        assert guess_up(cloud) == up
+    assert guess_up(None) == "z" and guess_up(SimpleNamespace(vertices=None)) == "z"
+    with pytest.raises(InputError):
+        up_frame("+-y")

@@ -100,7 +100,8 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     if o["html"]:
         from ..viz.pages import read_truth
 
-        info(f"wrote {result.to_html(o['html'], truth=read_truth(o['truth']))}")
+        paths = dict(source=source, target=target, output=output, html=o["html"])  # for the page's command
+        info(f"wrote {result.to_html(o['html'], truth=read_truth(o['truth']), command=paths)}")
     summary = dict(result.summary, source=str(source), target=str(target), output=str(out),
                    seconds=time.perf_counter() - t0)
     if o["as_json"]:

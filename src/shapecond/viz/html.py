@@ -144,6 +144,20 @@ def _landmarks_json(scene: Scene, full: Scene, layer, full_layer) -> list:
     return out
 
 
+def _suggestions_json(full: Scene) -> list:
+    """Suggested points: positions, normals and ids from the undecimated scene, with their labels."""
+    out = []
+    for k, (v, label) in enumerate(full.suggestions):
+        v = int(v)
+        if not 0 <= v < full.n_vertices:
+            raise InputError(f"suggested vertex index {v} out of range")
+        part = next((name + " " for name, a, b in full.parts if a <= v < b), "")
+        out.append(dict(position=[float(x) for x in full.vertices[v]], label=f"S{k + 1}", note=str(label or ""),
+                        normal=None if full.normals is None else [float(x) for x in full.normals[v]],
+                        name=f"{part}vertex {int(full.ids[v])}", id=int(full.ids[v])))
+    return out
+
+
 def scene_data(scene: Scene, max_vertices: int = MAX_DISPLAY_VERTICES) -> dict:
     """The JSON-ready data of one viewer (decimated beyond ``max_vertices``), deterministic."""
     shown, note = decimate(scene, max_vertices)
@@ -164,7 +178,9 @@ def scene_data(scene: Scene, max_vertices: int = MAX_DISPLAY_VERTICES) -> dict:
                 parts=[list(p) for p in shown.parts], layers=layers,
                 views=[list(v) for v in shown.views], view_labels=[view_label(*v) for v in shown.views],
                 shading=[AMBIENT, DIFFUSE], facing=FACING, point_size=max(3.0, np.sqrt(shown.point_size) * 2),
-                title=shown.title, notes=list(shown.notes) + ([note] if note else []))
+                title=shown.title, notes=list(shown.notes) + ([note] if note else []),
+                suggestions=_suggestions_json(scene), picking=scene.picking,
+                marker_colours=[_hex(landmark_colour(0)), _hex(landmark_colour(3))])
 
 
 def _json(obj) -> str:

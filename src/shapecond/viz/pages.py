@@ -9,7 +9,8 @@ from the same scenes as the PNGs (``viz.scene``):
   hover, each vertex's id and (interpolated) value;
 * ``landmarks_page``: the landmarks in order with the score after each;
 * ``match_page``: the colour transfer source -> target through the map, the
-  landmarks linked, and the error field when the ground truth is given;
+  landmarks linked, the error field when the ground truth is given, suggested
+  points, and landmark pairs picked by clicking with the command that uses them;
 * ``local_page``: the local score with each vertex fixed (the doubt field);
 * ``evaluation_page``: the evaluation report's text and plots, and a viewer per
   class (the null shape with each method's landmarks).
@@ -113,14 +114,16 @@ def local_page(geometry, heatmap, fixed=(), *, result=None, title=None) -> str:
 
 # --- matching ---------------------------------------------------------------------------------
 
-def _pair(src, tgt):
-    """Display coordinates of two shapes side by side (the target beside the source along y)."""
+def _pair(src, tgt, up=None):
+    """Display coordinates of two shapes side by side (the target beside the source along y), both turned
+    so that ``up`` (default: ``guess_up`` of the two together) is vertical."""
     from .scene import up_frame
 
+    up = up or guess_up(src, tgt)
     out = []
     for g in (src, tgt):
         V = np.asarray(g.vertices, float)
-        out.append((V - V.mean(axis=0)) @ up_frame(guess_up(g), V).T)
+        out.append((V - V.mean(axis=0)) @ up_frame(up, V).T)
     a, b = out
     gap = 0.15 * max(np.ptp(a[:, 1]), np.ptp(b[:, 1]))
     b = b + np.array([0.0, a[:, 1].max() - b[:, 1].min() + gap, 0.0])
@@ -154,13 +157,27 @@ def match_errors(src, tgt, vmap, truth, n_points: int = 200, backend: str = "hea
 
 @dataclass(frozen=True)
 class MatchFields:
-    """Fields on the source a match page can show: the error against ``truth`` (target internal index per
-    source internal index, -1: none) and the error bar's ``doubt`` (sqrt(area) units per source internal
-    index, ``matching.error_bar``) with its sentence ``doubt_text``."""
+    """What a match page shows beyond the map.
+
+    Attributes
+    ----------
+    truth : the ground truth, target internal index per source internal index (-1: none), for the
+        error field; or None
+    doubt, doubt_text : the error bar's doubt field (sqrt(area) units per source internal index,
+        ``matching.error_bar``) and its sentence; or None
+    suggestions : points of the source worth fixing next, ((source internal index, label), ...) in order,
+        drawn with their own markers and listed with their labels (e.g. the error bar expected after each)
+    command : the paths as given on the command line (``match_picking``), for the command the page
+        builds from the landmarks picked on it; or None (placeholders)
+    up : the vertical direction of both shapes (``scene.up_frame``); None: ``guess_up(source, target)``
+    """
 
     truth: np.ndarray | None = None
     doubt: np.ndarray | None = None
     doubt_text: str = ""
+    suggestions: tuple = ()
+    command: dict | None = None
+    up: str | None = None
 
 
 def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
@@ -204,15 +221,51 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
     return layers, notes
 
 
+#: The words of the command a match page builds, and what it shows for those it was not given.
+COMMAND_WORDS = (("source", "SOURCE"), ("target", "TARGET"), ("output", "MAP.txt"), ("html", "PAGE.html"))
+
+
+def match_picking(src, tgt, landmarks_source, landmarks_target, command=None) -> dict:
+    """What a match page needs to build ``shapecond match`` commands from landmarks picked by clicking.
+
+    ``command``: the paths as given on the command line (keys ``source``, ``target``,
+    ``output``, ``html``; a missing one is shown as a placeholder), shell-quoted here;
+    ``pairs``: the landmark pairs so far as file vertex ids.
+    """
+    import shlex
+
+    given = dict(command or {})
+    unknown = set(given) - {k for k, _ in COMMAND_WORDS}
+    if unknown:
+        raise InputError(f"unknown command word(s) {', '.join(sorted(unknown))}; "
+                         f"known: {', '.join(k for k, _ in COMMAND_WORDS)}")
+    words = {k: shlex.quote(str(given[k])) if given.get(k) is not None else shown for k, shown in COMMAND_WORDS}
+    pairs = [[int(src.ids[int(a)]), int(tgt.ids[int(b)])] for a, b in zip(landmarks_source, landmarks_target)]
+    return dict(words, pairs=pairs, placeholders=[k for k, _ in COMMAND_WORDS if given.get(k) is None])
+
+
+def _suggestions(src, suggestions) -> tuple:
+    out = []
+    for item in suggestions:
+        v, label = item
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 0 <= int(v) < src.n_vertices:
+            raise InputError(f"a suggestion needs a source vertex index in 0..{src.n_vertices - 1}, got {v!r}")
+        out.append((int(v), "" if label is None else str(label)))
+    return tuple(out)
+
+
 def match_page(src, tgt, vmap, landmarks_source=(), landmarks_target=(), *, fields: MatchFields = MatchFields(),
                title=None, lines=()) -> str:
     """Page of a dense map between two Geometries; ``vmap``: target internal index per source internal
-    index (-1: none); landmarks as internal indices; ``fields``: the error and doubt fields to show.
-    Source left, target right."""
+    index (-1: none); landmarks as internal indices; ``fields``: the error and doubt fields, the suggested
+    points, the command line's paths and the up direction (``MatchFields``).  Source left, target right;
+    a click on a source vertex, then on a target vertex, appends a landmark pair to the command shown."""
     if not (getattr(src, "vertices", None) is not None and getattr(tgt, "vertices", None) is not None):
         raise InputError("a map between distance matrices has no surface to draw")
     vmap = np.asarray(vmap, dtype=np.int64)
-    a, b = _pair(src, tgt)
+    suggestions = _suggestions(src, fields.suggestions)
+    picking = match_picking(src, tgt, landmarks_source, landmarks_target, fields.command)
+    a, b = _pair(src, tgt, fields.up)
     if fields.truth is not None:
         fields = replace(fields, truth=np.asarray(fields.truth, dtype=np.int64))
     layers, notes = _match_layers(src, tgt, vmap, a, b, landmarks_source, landmarks_target, fields)
@@ -225,12 +278,16 @@ def match_page(src, tgt, vmap, landmarks_source=(), landmarks_target=(), *, fiel
     scene = make_scene(np.vstack([a, b]), F, layers, up=None, ids=np.concatenate([src.ids, tgt.ids]), title=title,
                        notes=notes)
     scene = replace(scene, parts=(("source", 0, n_s), ("target", n_s, n_s + tgt.n_vertices)),
-                    partner=np.concatenate([np.where(vmap >= 0, vmap + n_s, -1), np.full(tgt.n_vertices, -1)]))
+                    partner=np.concatenate([np.where(vmap >= 0, vmap + n_s, -1), np.full(tgt.n_vertices, -1)]),
+                    suggestions=suggestions, picking=picking)
     body = [summary(lines) if lines else "", viewer(scene, max(MAX_DISPLAY_VERTICES, 2 * 30_000)),
             "<p>Left the source, coloured by position; right the target, each vertex coloured like the source "
             "vertex mapped nearest to it: where the map is right the colours carry over smoothly. Landmarks "
             "are numbered alike on both shapes and joined. Hover a source vertex: its image is marked on the "
-            "target.</p>"]
+            "target. <b>Pick landmarks</b>: click a source vertex, then the target vertex it corresponds to; "
+            "the pair is appended to the command below the view (run it to match again with it)"
+            + (", and the suggested points (S1, S2, ...) are where a landmark should help most" if suggestions
+               else "") + ".</p>"]
     return page(f"shapecond match: {src.name} → {tgt.name}", body)
 
 
@@ -353,7 +410,7 @@ def result_page(result, **kw) -> str:
     raise InputError(f"no HTML page for a {kind}")
 
 
-def _match_result_page(result, truth=None, **kw) -> str:
+def _match_result_page(result, truth=None, suggestions=(), command=None, up=None, **kw) -> str:
     drawing = getattr(result, "drawing", None)
     if drawing is None:
         raise InputError("a map between distance matrices has no surface to draw")
@@ -375,7 +432,7 @@ def _match_result_page(result, truth=None, **kw) -> str:
     s = result.summary
     lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
     doubt = None if result.doubt is None else result.doubt[src.ids]
-    fields = MatchFields(t, doubt, s.get("error_bar", {}).get("text", ""))
+    fields = MatchFields(t, doubt, s.get("error_bar", {}).get("text", ""), tuple(suggestions), command, up)
     return match_page(src, tgt, vmap, ls, lt, fields=fields, lines=lines, **kw)
 
 

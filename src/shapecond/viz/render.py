@@ -110,7 +110,8 @@ class Look:
     ----------
     views : sequence of (elevation, azimuth) in degrees, camera positions around ``up``
         (``view_rotation``).
-    up : {"x", "y", "z"}, the data's vertical axis (TOSCA meshes: ``"z"``).
+    up : {"x", "y", "z"}, optionally signed ("-y"): the data's vertical direction (TOSCA meshes: ``"z"``;
+        ``scene.guess_up`` guesses it).
     title : the figure's title.
     point_size : marker size of a point cloud.
     labels : number the landmarks.

@@ -119,6 +119,9 @@ class Scene:
     partner : (n,) vertex index each vertex is linked to (-1: none), or None
     normals : (n, 3) unit vertex normals (meshes) or None
     notes : lines printed with the picture
+    suggestions : ((vertex index, label), ...) points drawn with their own markers (HTML only)
+    picking : None, or the pieces of the command a page builds from landmark pairs picked by clicking a
+        vertex of the first part, then one of the second (HTML only; ``viz.pages.match_page``)
     """
 
     vertices: np.ndarray
@@ -134,6 +137,8 @@ class Scene:
     partner: np.ndarray | None = None
     normals: np.ndarray | None = None
     notes: tuple = ()
+    suggestions: tuple = ()
+    picking: dict | None = None
 
     @property
     def n_vertices(self) -> int:
@@ -147,17 +152,23 @@ class Scene:
         return replace(self, layers=tuple(layers))
 
 
+def _axis(up: str) -> np.ndarray:
+    """Unit vector of an up direction: ``"x"``, ``"y"``, ``"z"``, optionally signed (``"-y"``, ``"+z"``)."""
+    if up not in {sign + axis for sign in ("", "+", "-") for axis in _AXES}:
+        raise InputError(f"up axis must be one of x, y, z (optionally signed: -y), got {up!r}")
+    return np.eye(3)[_AXES[up[-1]]] * (-1.0 if up.startswith("-") else 1.0)
+
+
 def up_frame(up: str, V: np.ndarray | None = None) -> np.ndarray:
-    """Rotation taking the data's ``up`` axis to z (rows: new x, y, z axes).
+    """Rotation taking the data's ``up`` direction (an axis, optionally signed: ``"-y"``) to z (rows: new
+    x, y, z axes).
 
     Of the two horizontal axes, the one along which the shape is longer becomes the
     new y, so that azimuth 0 and 180 look at the shape's broad sides (an animal's
     flanks, a standing human's front and back) whatever the file's convention.
     """
-    if up not in _AXES:
-        raise InputError(f"up axis must be one of x, y, z, got {up!r}")
-    k = _AXES[up]
-    z = np.eye(3)[k]
+    z = _axis(up)
+    k = int(np.argmax(np.abs(z)))
     a, b = np.eye(3)[(k + 1) % 3], np.eye(3)[(k + 2) % 3]
     if V is not None and np.ptp(V @ a) > np.ptp(V @ b):
         a, b = b, a
@@ -166,9 +177,98 @@ def up_frame(up: str, V: np.ndarray | None = None) -> np.ndarray:
     return np.stack([x, y, z])
 
 
-def guess_up(geometry) -> str:
-    """Vertical axis of a shape: ``"y"`` for the generated animal, ``"z"`` otherwise (TOSCA)."""
-    return "y" if getattr(geometry, "name", "") == "animal" else "z"
+#: ``guess_up``: the extremities looked at (geodesic farthest points), how close to a floor one must be
+#: (fraction of the shape's extent along the direction, at least ``UP_MIN_EXTENT`` of its largest extent),
+#: the smallest extent of an up direction (fraction of the largest) and the default's head start.
+UP_EXTREMITIES, UP_FLOOR, UP_MIN_EXTENT, UP_PRIOR = 8, 0.03, 0.3, 1.0
+#: The directions ``guess_up`` chooses among (x is the horizontal "right" of every common convention).
+UP_CANDIDATES = ("z", "-z", "y", "-y")
+
+
+def extremities(V: np.ndarray, F: np.ndarray | None, m: int = UP_EXTREMITIES) -> np.ndarray:
+    """The first ``m`` farthest-point samples under the edge-graph geodesic distance (internal indices).
+
+    The first is the vertex farthest from the one nearest the centroid; each next one
+    is farthest from those so far: on a body they are the tips of its limbs, head and
+    tail.  A point cloud is joined to its 6 nearest neighbours.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    n = V.shape[0]
+    if F is not None and len(F):
+        E = np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    else:
+        _, nn = cKDTree(V).query(V, k=min(7, n))
+        E = np.column_stack([np.repeat(np.arange(n), nn.shape[1] - 1), nn[:, 1:].ravel()])
+    w = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1) + 1e-12
+    G = coo_matrix((w, (E[:, 0], E[:, 1])), shape=(n, n)).tocsr()
+
+    def row(i):
+        d = dijkstra(G, directed=False, indices=int(i))
+        return np.where(np.isfinite(d), d, -1.0)  # another component: never chosen
+
+    far = row(np.argmin(np.linalg.norm(V - V.mean(axis=0), axis=1)))
+    picks = [int(np.argmax(far))]
+    front = row(picks[0])
+    while len(picks) < min(m, n):
+        picks.append(int(np.argmax(front)))
+        front = np.minimum(front, row(picks[-1]))
+    return np.asarray(picks, dtype=np.int64)
+
+
+def floor_scores(vertices, faces=None) -> dict:
+    """Per candidate up direction (``UP_CANDIDATES``): how many extremities rest on the floor below.
+
+    A direction's floor is the plane through the shape's lowest vertex along it;
+    an extremity rests on it when it lies within ``UP_FLOOR`` of the shape's extent
+    along the direction (at least ``UP_MIN_EXTENT`` of the largest extent).  The
+    score is that count plus a tie-break in [0, 1): one minus the mean height of all
+    the extremities.  A direction along which the shape is flatter than
+    ``UP_MIN_EXTENT`` of its largest extent scores -inf.
+    """
+    V = np.asarray(vertices, dtype=float)
+    F = None if faces is None else np.asarray(faces, dtype=np.int64)
+    X = extremities(V, F)
+    top = float(np.ptp(V, axis=0).max()) or 1.0
+    out = {}
+    for up in UP_CANDIDATES:
+        h = V @ _axis(up)
+        ext = float(np.ptp(h))
+        if ext < UP_MIN_EXTENT * top:
+            out[up] = -np.inf
+            continue
+        rel = (h[X] - h.min()) / max(ext, UP_MIN_EXTENT * top)
+        out[up] = float(np.count_nonzero(rel <= UP_FLOOR)) + 1.0 - float(np.clip(rel.mean(), 0.0, 1.0)) * 0.999
+    return out
+
+
+def guess_up(*geometries) -> str:
+    """Up direction of one or more shapes drawn together: ``"z"``, ``"y"`` or a signed ``"-y"``, ``"-z"``.
+
+    A standing body rests on its feet: the up direction is the one whose floor most
+    of the body's extremities (the tips of legs, arms, head and tail, found as the
+    first geodesic farthest points, ``extremities``) touch — two feet, four paws —
+    where a head, a nose or a hand stands alone at the other ends.  The shape's
+    extents cannot decide it (a standing human is tallest along its up axis, a
+    four-legged animal longest along its body), and the file format does not say it.
+
+    The candidates are ±z and ±y (x is the horizontal "right" of the common
+    conventions: TOSCA's z-up, OBJ/PLY's y-up, SMAL releases' -y-up); ``"z"`` has a
+    head start of ``UP_PRIOR``: another direction wins when two more extremities touch
+    its floor than z's, or one more and the tie-break (their mean height) favours it
+    (``floor_scores``).  The scores of several shapes add up (both shapes of a match
+    page stand alike).  Unusual poses can fool it (a body lying, sitting, jumping):
+    pass ``up`` explicitly there.  Without a surface (a distance matrix, None): ``"z"``.
+    """
+    total = {up: UP_PRIOR if up == "z" else 0.0 for up in UP_CANDIDATES}
+    for g in geometries:
+        V = getattr(g, "vertices", None)
+        if V is None or len(V) < 4:
+            continue
+        for up, s in floor_scores(V, getattr(g, "faces", None)).items():
+            total[up] += s
+    return max(UP_CANDIDATES, key=lambda up: total[up])  # ties: the earlier candidate
 
 
 def colour_layer(data, n: int, cmap: str = "viridis", vmin=None, vmax=None, *, hover=None, **kw) -> Layer:

@@ -36,9 +36,9 @@ def render_witness_png(shape, witness, path, *, landmarks=(), fig=None, **option
         PNG to write.
     landmarks : sequence of int
         Sample indices fixed by the map, drawn as markers.
-    up : {"x", "y", "z"} or None
-        Vertical axis of the data; None guesses it (``scene.guess_up``: TOSCA z,
-        the generated animal y).
+    up : {"x", "y", "z"}, optionally signed ("-y"), or None
+        Vertical direction of the data; None guesses it from the shape (``scene.guess_up``:
+        the direction whose floor most of its extremities touch).
     max_segments : int
         Number of the longest moves drawn as segments (default 80).
     views, title : as ``render.Look``.

@@ -57,7 +57,10 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       }));
       this.elev = data.views[0][0]; this.azim = data.views[0][1]; this.zoom = 1;
       this.current = -1; this.frames = 0; this.firstFrame = null; this.hovered = -1;
-      this.dom(); this.three(); this.setLayer(0); this.events(); this.draw();
+      this.extra = [];  // markers drawn on every colouring: suggestions, picked landmarks
+      this.dom(); this.three(); this.suggestions();
+      if (data.picking && data.parts.length === 2) this.picker = new Picker(this, data.picking);
+      this.setLayer(0); this.events(); this.draw();
     }
 
     dom() {
@@ -213,7 +216,7 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       this.frames += 1;
       if (this.firstFrame === null) requestAnimationFrame(() => { if (this.firstFrame === null) this.firstFrame = performance.now(); });
       const rect = this.canvas.getBoundingClientRect(), stage = this.stage.getBoundingClientRect();
-      for (const { lm, label } of this.layers[this.current].marks) {
+      for (const { lm, label } of this.layers[this.current].marks.concat(this.extra)) {
         const facing = lm.normal === null || (lm.normal[0] * f.toward.x + lm.normal[1] * f.toward.y +
           lm.normal[2] * f.toward.z) > this.d.facing;
         const p = this.screen(lm.position, rect);
@@ -258,6 +261,45 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       return best;
     }
 
+    partOf(i) {
+      return this.d.parts.findIndex(([, lo, hi]) => i >= lo && i < hi);
+    }
+
+    // a marker on every colouring: a sphere (or a diamond), its number beside it
+    marker(position, colour, text, diamond) {
+      const T = this.T, r = this.radius * (diamond ? 0.026 : 0.018);
+      const m = new T.Mesh(diamond ? new T.OctahedronGeometry(r) : new T.SphereGeometry(r, 16, 12),
+        new T.MeshBasicMaterial({ color: new T.Color(colour) }));
+      m.position.set(...position);
+      const label = el("div", "sc-label", text); label.style.color = colour; this.labels.append(label);
+      const mark = { lm: { position, normal: null }, label, mesh: m };
+      this.extra.push(mark);
+      return mark;
+    }
+
+    unmark(mark) {
+      this.extra = this.extra.filter((m) => m !== mark); mark.label.remove();
+      mark.mesh.geometry.dispose(); mark.mesh.removeFromParent();
+    }
+
+    // suggested points (viz.pages.MatchFields.suggestions): diamonds S1, S2, ... and their list
+    suggestions() {
+      const list = this.d.suggestions || [];
+      if (!list.length) return;
+      const box = el("div", "sc-suggest");
+      box.append(el("div", "sc-caption", "suggested next landmarks (diamonds)" +
+        (this.d.picking ? "; click one here to pick it on the source" : "")));
+      const ol = el("ol", "sc-landmarks");
+      for (const s of list) {
+        this.scene.add(this.marker(s.position, SUGGEST_COLOUR, s.label, true).mesh);
+        const li = el("li", "sc-suggestion", `${s.label}. ${s.name}` + (s.note ? ` — ${s.note}` : ""));
+        li.style.borderLeft = `6px solid ${SUGGEST_COLOUR}`;
+        li.onclick = () => { if (this.picker) this.picker.click(this.indexOfId(s.id, 0)); };
+        ol.append(li);
+      }
+      box.append(ol); this.root.append(box);
+    }
+
     pick(i) { this.hovered = i; this.showHover(); this.draw(); }
 
     showHover() {
@@ -278,8 +320,16 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
     events() {
       const c = this.canvas;
       let drag = null, pending = false, last = null;
-      c.addEventListener("pointerdown", (e) => { drag = [e.clientX, e.clientY]; c.setPointerCapture(e.pointerId); });
-      c.addEventListener("pointerup", (e) => { drag = null; c.releasePointerCapture(e.pointerId); });
+      let down = null;
+      c.addEventListener("pointerdown", (e) => {
+        drag = down = [e.clientX, e.clientY]; c.setPointerCapture(e.pointerId);
+      });
+      c.addEventListener("pointerup", (e) => {
+        drag = null; c.releasePointerCapture(e.pointerId);
+        const still = down && Math.hypot(e.clientX - down[0], e.clientY - down[1]) < 5;
+        if (still && this.picker) this.picker.click(this.vertexAt(e.clientX, e.clientY));
+        down = null;
+      });
       c.addEventListener("pointermove", (e) => {
         if (drag) {
           this.azim -= (e.clientX - drag[0]) * 0.4;
@@ -297,6 +347,108 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
         e.preventDefault(); this.zoom = Math.max(0.2, Math.min(50, this.zoom * Math.exp(-e.deltaY * 0.001))); this.draw();
       }, { passive: false });
       if (window.ResizeObserver) new ResizeObserver(() => this.draw()).observe(this.stage);
+    }
+  }
+
+  const SUGGEST_COLOUR = "#c01fc0", PENDING_COLOUR = "#ff8c00";
+
+  // Landmark pairs picked by clicking a source vertex, then a target vertex (viz.pages.match_picking):
+  // numbered after the command line's pairs, with the command that re-runs the match with all of them.
+  class Picker {
+    constructor(v, p) {
+      this.v = v; this.p = p; this.pairs = []; this.pending = -1; this.marks = [];
+      this.lines = new v.T.Group(); v.scene.add(this.lines);
+      const box = el("div", "sc-pick"), row = el("div", "sc-pick-row");
+      this.state = el("span", "sc-pick-state");
+      this.undoButton = el("button", "sc-undo", "undo last pair"); this.undoButton.onclick = () => this.undo();
+      this.copyButton = el("button", "sc-copy", "copy command"); this.copyButton.onclick = () => this.copy();
+      this.files = ["source", "target"].map((side) => {
+        const a = el("a", "sc-file", `landmark file (${side})`);
+        a.download = `landmarks_${side}.txt`; return a;
+      });
+      row.append(this.undoButton, this.copyButton, ...this.files, this.state);
+      this.command = el("pre", "sc-command");
+      box.append(el("div", "sc-caption", "pick landmarks: click a source vertex, then its target vertex; " +
+        "the command re-runs the match with every pair so far"), this.command, row);
+      if (p.placeholders.length) {
+        box.append(el("div", "sc-notes", `${p.placeholders.map((k) => p[k]).join(", ")}: stand-ins for the ` +
+          "paths of this match, which the page was written without"));
+      }
+      v.root.append(box);
+      this.update("");
+    }
+
+    id(i) { return this.v.ids ? this.v.ids[i] : i; }
+
+    // every pair so far as [source ids, target ids]: the command line's, then the picked ones
+    ids() {
+      const all = this.p.pairs.concat(this.pairs.map(([s, t]) => [this.id(s), this.id(t)]));
+      return [all.map((q) => q[0]), all.map((q) => q[1])];
+    }
+
+    text() {
+      const [s, t] = this.ids(), p = this.p;
+      if (!s.length) return "(no landmark pair yet)";
+      return `shapecond match ${p.source} ${p.target} --landmarks-source ${s.join(",")} ` +
+        `--landmarks-target ${t.join(",")} -o ${p.output} --html ${p.html}`;
+    }
+
+    click(i) {
+      const part = i < 0 ? -1 : this.v.partOf(i);
+      if (part === 0) { this.pending = i; this.update(`source vertex ${this.id(i)}: now click its target vertex`); }
+      else if (part === 1 && this.pending >= 0) {
+        this.pairs.push([this.pending, i]); this.pending = -1;
+        this.update(`pair ${this.p.pairs.length + this.pairs.length} added`);
+      } else if (part === 1) this.update("click a source vertex first");
+    }
+
+    undo() {
+      if (this.pending >= 0) this.pending = -1; else this.pairs.pop();
+      this.update("");
+    }
+
+    copy() {
+      const text = this.text(), done = () => this.update("command copied"), v = this.command;
+      const fallback = () => {
+        const r = document.createRange(); r.selectNodeContents(v);
+        const sel = window.getSelection(); sel.removeAllRanges(); sel.addRange(r);
+        let ok = false;
+        try { ok = document.execCommand("copy"); } catch (err) { ok = false; }
+        this.update(ok ? "command copied" : "command selected: press Ctrl+C");
+      };
+      if (navigator.clipboard && window.isSecureContext) navigator.clipboard.writeText(text).then(done, fallback);
+      else fallback();
+    }
+
+    redraw() {
+      const v = this.v, T = v.T, [first, rest] = v.d.marker_colours;
+      const at = (i) => Array.from(v.pos.slice(3 * i, 3 * i + 3));
+      this.marks.forEach((m) => v.unmark(m)); this.marks = [];
+      this.lines.children.slice().forEach((c) => { c.geometry.dispose(); this.lines.remove(c); });
+      this.pairs.forEach(([s, t], k) => {
+        const rank = this.p.pairs.length + k, colour = rank < 3 ? first : rest;
+        for (const i of [s, t]) {
+          const m = v.marker(at(i), colour, String(rank + 1)); this.marks.push(m); this.lines.add(m.mesh);
+        }
+        const g = new T.BufferGeometry().setFromPoints([new T.Vector3(...at(s)), new T.Vector3(...at(t))]);
+        this.lines.add(new T.LineSegments(g, new T.LineBasicMaterial({ color: 0x000000 })));
+      });
+      if (this.pending >= 0) {
+        const m = v.marker(at(this.pending), PENDING_COLOUR, "?"); this.marks.push(m); this.lines.add(m.mesh);
+      }
+    }
+
+    update(message) {
+      const [s, t] = this.ids();
+      const file = (a) => "data:text/plain;charset=utf-8," + encodeURIComponent(a.join(",") + "\n");
+      this.command.textContent = this.text();
+      this.command.setAttribute("data-source-ids", s.join(","));
+      this.command.setAttribute("data-target-ids", t.join(","));
+      this.files[0].href = file(s); this.files[1].href = file(t);
+      this.undoButton.disabled = !this.pairs.length && this.pending < 0;
+      this.state.textContent = message;
+      this.redraw();
+      if (this.v.current >= 0) this.v.draw();
     }
   }
 
