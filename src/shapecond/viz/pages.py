@@ -432,6 +432,9 @@ def _match_result_page(result, truth=None, suggestions=(), command=None, up=None
     s = result.summary
     lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
     doubt = None if result.doubt is None else result.doubt[src.ids]
+    if not suggestions and s.get("suggestions"):  # the match's own (``MatchResult.suggest``)
+        suggestions = tuple((int(src.to_internal([p["source_id"]])[0]),
+                             f"image {p['image_id']}, bar after it {p['bar_after']:.3g}") for p in s["suggestions"])
     fields = MatchFields(t, doubt, s.get("error_bar", {}).get("text", ""), tuple(suggestions), command, up)
     return match_page(src, tgt, vmap, ls, lt, fields=fields, lines=lines, **kw)
 
