@@ -7,8 +7,8 @@ Non-Rigid Shape Matching*, SGP 2011.  Data flows one way::
 
 This package is the front door (``shapecond.api``): ``sc.load``, ``sc.info``,
 ``sc.metric_shape``, ``sc.score``, ``sc.local_score``, ``sc.landmarks``,
-``sc.heatmap``, ``sc.kappa``, ``sc.match``, ``sc.deformation_level``, ``sc.SymmetryProblem``, their result
-types, and ``sc.evaluate`` (the paper's evaluation, ``shapecond.evaluation``).
+``sc.heatmap``, ``sc.kappa``, ``sc.match``, ``sc.match_collection``, ``sc.deformation_level``,
+``sc.SymmetryProblem``, their result types, and ``sc.evaluate`` (the paper's evaluation, ``shapecond.evaluation``).
 ``sc.landmarks`` is the function; the landmark methods themselves are imported
 from the subpackage as ``from shapecond.selection import ...``.
 """
@@ -25,7 +25,8 @@ from .errors import InputError, OutputError, ShapecondError, TooLargeError  # no
 
 #: The front door's names (``shapecond.api``) and ``evaluate`` (``shapecond.evaluation``), imported on first use.
 _API = ("DeformationLevel", "HeatMapResult", "KappaResult", "LandmarkResult", "LocalResult", "MatchResult",
-        "ScoreResult", "SymmetryProblem", "deformation_level", "heatmap", "info", "kappa", "landmarks", "load", "local_score", "match", "metric_shape",
+        "ScoreResult", "SymmetryProblem", "deformation_level", "heatmap", "info", "kappa", "landmarks", "load", "local_score", "match",
+        "match_collection", "metric_shape",
         "score")
 
 __all__ = sorted(_API + ("InputError", "OutputError", "ShapecondError", "TooLargeError", "__version__", "evaluate"))

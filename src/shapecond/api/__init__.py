@@ -15,6 +15,8 @@ every door.
   repeated queries;
 * ``settings``: ``score_settings``, the checked settings of both kinds of score;
 * ``matching``: ``match``, a dense map between two shapes guided by landmarks;
+* ``collection``: ``match_collection``, one template matched to every shape of a collection with the
+  landmarks named in files (``shapes.landmark_files``);
 * ``level``: ``deformation_level``, the distortion level ε̂ of a shape against
   others, read off matched maps (the ε of ``score``, ``landmarks``, ``heatmap``);
 * ``results``: what they return (frozen dataclasses with ``to_dict()``,
@@ -36,7 +38,7 @@ _HOME = {"DEFAULT_POINTS": "inputs", "info": "inputs", "load": "inputs", "metric
          "HeatMapResult": "results", "KappaResult": "results", "LandmarkResult": "results", "LocalResult": "results",
          "MatchResult": "results", "ScoreResult": "results", "heatmap": "scores", "kappa": "scores",
          "landmarks": "scores", "local_score": "scores", "score": "scores", "DeformationLevel": "level",
-         "deformation_level": "level"}
+         "deformation_level": "level", "match_collection": "collection"}
 
 __all__ = sorted(_HOME)
 
