@@ -67,15 +67,16 @@ def write_map(path, vertex_map) -> Path:
     return Path(path)
 
 
-def match_to_template(template, shape, template_lm: dict, table: dict | None = None, **match_options):
+def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None, **match_options):
     """(the row's match fields, the map) of ``shape`` matched from ``template`` (module docstring).
 
     Parameters
     ----------
     template : the template (a path or a loaded ``Geometry``).
-    shape : the shape file; its landmarks come from ``table`` or ``NAME.lmk`` beside it.
+    shape : the shape (a path or a loaded ``Geometry``).
     template_lm : the template's ``{label: vertex id}``.
-    table : ``read_landmark_csv``'s result, or None.
+    shape_lm : the shape's (``{label: vertex id}``, where they were read), as ``landmarks_of`` gives them;
+        None when it has none.
     **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``seed``...); ``suggest`` defaults to 1.
 
     Returns
@@ -85,10 +86,9 @@ def match_to_template(template, shape, template_lm: dict, table: dict | None = N
     ``InputError`` for a shape without landmarks, with fewer than ``MIN_PAIRS`` shared labels, or with an id
     out of range.
     """
-    found = landmarks_of(shape, table)
-    if found is None:
-        raise InputError(f"no landmarks for this shape (no {Path(str(shape)).stem}.lmk beside it and no rows "
-                         "in the landmark table)")
+    if shape_lm is None:
+        raise InputError("no landmarks for this shape (no NAME.lmk beside it and no rows in the landmark table)")
+    found = shape_lm
     labels, ids_t, ids_s = pair_by_label(template_lm, found[0])
     if len(labels) < MIN_PAIRS:
         raise InputError(f"{len(labels)} landmark labels shared with the template ({found[1]}); "
@@ -175,7 +175,9 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, **match
     row per shape in order: ``shape`` (map name), ``file``, ``direction``, the fields of
     ``match_to_template``, ``annotate_more`` (bar > ``ANNOTATE_MORE``), ``seconds`` and ``error`` (the
     one-line message of a shape that failed; the others are then missing).  ``maps`` a ``Maps``: name ->
-    map, read lazily.  ``InputError`` when the template or a landmark file cannot be read.
+    map, read lazily.  ``InputError`` when the template, its landmarks or the landmark CSV file cannot be
+    read or a template id is out of range; a shape's own problem (no landmarks, a broken ``.lmk``, fewer
+    than ``MIN_PAIRS`` shared labels, an id out of range, a file that does not load) is its row's error.
 
     Examples
     --------
@@ -187,16 +189,17 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, **match
         raise InputError("landmarks must be None, the path of a CSV file or a dict {shape: {label: vertex}}")
     shapes = [str(s) for s in shapes]
     names = map_names(shapes)
-    template_lm = template_landmarks(template, table)
     flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
     loaded = load(template, **flags)
+    template_lm = template_landmarks(template, table)
     check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {template}")
     maps, rows = Maps(maps_dir), []
     for name, shape in zip(names, shapes):
         row = {"shape": name, "file": shape, "direction": DIRECTION}
         t0 = time.perf_counter()
         try:
-            fields, vertex_map = match_to_template(loaded, shape, template_lm, table, **match_options)
+            fields, vertex_map = match_to_template(loaded, shape, template_lm, landmarks_of(shape, table),
+                                                   **match_options)
             maps.add(name, vertex_map)
             row.update(fields, annotate_more=fields["bar"] is not None and fields["bar"] > ANNOTATE_MORE)
         except ShapecondError as exc:

@@ -28,36 +28,42 @@ from .inputs import content_hash
 #: The options of ``shapecond score`` a batch takes, with the command line's defaults.
 DEFAULT_OPTIONS = {"points": None, "metric": "geodesic", "geodesic_backend": "heat", "seed": 0,
                    "largest_component": False, "no_cache": False, "target": None, "target_factor": 8,
-                   "symmetry_map": None, "effort": "default", "what": ["score"], "force": False, "epsilon": None}
+                   "symmetry_map": None, "effort": "default", "what": ["score"], "force": False, "epsilon": None,
+                   "matcher": None, "landmark_table": None}
 #: ``epsilon`` read off the collection itself (``api.level.collection_level``) rather than given.
 COLLECTION = "collection"
+#: Options of matching (``--what match:TEMPLATE``): left out of the parameters of a batch without it.
+MATCH_OPTIONS = ("matcher", "landmark_table")
 #: Options that shape the results (``no_cache`` and ``force`` do not).
 KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k not in ("no_cache", "force"))
 
 
 @dataclass(frozen=True)
 class What:
-    """What to compute beyond ``info``: the global score, the local score, K landmarks of a method."""
+    """What to compute beyond ``info``: the global score, the local score, K landmarks of a method,
+    the map from a template (its absolute path)."""
 
     score: bool = True
     local: bool = False
     landmarks: tuple | None = None   # (K, METHOD)
+    match: str | None = None
 
     def items(self) -> list[str]:
         """The canonical ``--what`` list (the form stored in the ``params`` column)."""
         out = (["score"] if self.score else []) + (["local"] if self.local else [])
-        return out + ([f"landmarks:{self.landmarks[0]}:{self.landmarks[1]}"] if self.landmarks else [])
+        out += [f"landmarks:{self.landmarks[0]}:{self.landmarks[1]}"] if self.landmarks else []
+        return out + ([f"match:{self.match}"] if self.match else [])
 
 
 def parse_what(items) -> What:
-    """``["score", "local", "landmarks:5:fps"]`` (or one comma-separated string) -> ``What``."""
+    """``["score", "local", "landmarks:5:fps", "match:T.off"]`` (or one comma-separated string) -> ``What``."""
     from ..selection import METHODS
 
     if isinstance(items, str):
         items = [items]
     parts = [p.strip() for item in items for p in str(item).split(",") if p.strip()] or ["score"]
     score = local = False
-    landmarks = None
+    landmarks = match = None
     for p in parts:
         if p == "score":
             score = True
@@ -73,9 +79,13 @@ def parse_what(items) -> What:
             if landmarks is not None:
                 raise InputError("--what: one landmarks:K:METHOD per batch")
             landmarks = (int(bits[1]), bits[2])
+        elif p.startswith("match:") and p[6:]:
+            if match is not None:
+                raise InputError("--what: one match:TEMPLATE per batch")
+            match = os.path.abspath(p[6:])
         else:
-            raise InputError(f"--what {p!r}: choose score, local or landmarks:K:METHOD")
-    return What(score, local, landmarks)
+            raise InputError(f"--what {p!r}: choose score, local, landmarks:K:METHOD or match:TEMPLATE")
+    return What(score, local, landmarks, match)
 
 
 def with_defaults(options: dict) -> dict:
@@ -100,20 +110,31 @@ def params_key(options: dict) -> str:
     key = {k: v for k, v in with_defaults(options).items() if k in KEY_OPTIONS}
     if key["epsilon"] is None:  # the default level: the key of the tables written before there was a choice
         del key["epsilon"]
+    if not parse_what(key["what"]).match:  # the key of the tables written before there was matching
+        key = {k: v for k, v in key.items() if k not in MATCH_OPTIONS}
+    else:
+        key["template"] = content_hash(parse_what(key["what"]).match)
+        if key["landmark_table"]:
+            key["landmark_table"] = content_hash(str(key["landmark_table"]))
     if key.get("symmetry_map"):
         key["symmetry_map"] = content_hash(str(key["symmetry_map"]))
     return json.dumps(key, sort_keys=True, separators=(",", ":"))
 
 
-def shape_row(spec: str, expected_hash: str | None, options: dict, params: str) -> dict:
-    """The row of one shape (see ``schema.COLUMNS``); failures go to its ``error`` column."""
+def shape_row(spec: str, expected_hash: str | None, options: dict, params: str, landmarks=None) -> dict:
+    """The row of one shape (see ``schema.COLUMNS``); failures go to its ``error`` column.
+
+    ``landmarks``: with ``match:TEMPLATE``, (the template's ``{label: id}``, the shape's
+    ``shapes.landmark_files.landmarks_of``); the map is returned under the key ``"_map"``
+    (the caller writes it and removes it before the row is stored).
+    """
     row = schema.empty_row()
     row.update(file=spec, content_hash=expected_hash, params=params, version=__version__, worker=worker_name())
     t0, c0 = time.perf_counter(), time.process_time()
     with PeakMemory() as mem:
         try:
             _check_file(spec, expected_hash)
-            _fill(row, spec, options)
+            _fill(row, spec, options, landmarks)
         except ShapecondError as exc:
             row["error"] = _one_line(exc) or "bad input"
         except MemoryError:
@@ -145,7 +166,7 @@ def _check_file(spec: str, expected_hash: str | None) -> None:
                          "(changed since, or another file at the same path)")
 
 
-def _fill(row: dict, spec: str, options: dict) -> None:
+def _fill(row: dict, spec: str, options: dict, landmarks=None) -> None:
     from .. import api
 
     what = parse_what(options.get("what") or ["score"])
@@ -178,6 +199,25 @@ def _fill(row: dict, spec: str, options: dict) -> None:
         res = api.landmarks(shape, k, method, scores=True, effort=effort, **kw, **level)
         row.update(landmark_method=method, landmarks=[int(v) for v in res.landmarks],
                    landmark_scores=[math.nan if s is None else float(s) for s in res.scores])
+    if what.match:
+        _match_columns(row, what.match, loaded, landmarks, {**kw, "points": options.get("points"),
+                                                           "matcher": options.get("matcher")})
+
+
+def _match_columns(row: dict, template: str, shape, landmarks, kw: dict) -> None:
+    """The match columns (``schema.MATCH_COLUMNS``) and ``"_map"``: ``template`` matched to ``shape``."""
+    from ..api import DEFAULT_POINTS
+    from ..api.collection import DIRECTION, match_to_template
+
+    if landmarks is None:
+        raise InputError("matching to a template needs the landmarks of both shapes")
+    row.update(match_template=template, match_direction=DIRECTION)
+    fields, vertex_map = match_to_template(template, shape, *landmarks, matcher=kw["matcher"] or "lh05",
+                                           n_points=kw["points"] or DEFAULT_POINTS, seed=kw["seed"],
+                                           backend=kw["backend"], cache=kw["cache"], force=kw["force"],
+                                           largest_component=kw["largest_component"])
+    row.update(fields)
+    row["_map"] = vertex_map
 
 
 def _score_columns(row: dict, result) -> None:

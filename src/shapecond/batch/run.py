@@ -5,7 +5,8 @@ the output table (one writer at a time; ``table.Table``), drops the shapes
 whose (file, content hash, parameters) already have a row when resuming, runs
 one ``rows.shape_row`` task per remaining shape through ``parallel.runner``
 (this process, local processes or a Dask cluster), and appends each row as it
-arrives.  A shape that fails, or whose worker dies, becomes an error row; the
+arrives.  With ``match:TEMPLATE`` (``matches``) each row's map is written
+(atomically) before its row, and ``report.html`` is written beside the table.  A shape that fails, or whose worker dies, becomes an error row; the
 batch goes on.
 """
 
@@ -21,6 +22,8 @@ from .._version import __version__
 from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
+from .matches import MatchPlan, plan_matching
+from .report import write_report
 from .rows import COLLECTION, params_key, shape_row, with_defaults
 from .table import Table, table_format
 
@@ -44,6 +47,8 @@ class BatchSummary:
     failures: list = field(default_factory=list)         # dicts file, error
     epsilon: float | None = None                         # the level of δ (None: each shape's sample spacing)
     epsilon_source: str = "the median sample spacing of each shape (default)"
+    annotate_more: list = field(default_factory=list)    # match: dicts file, bar, suggested landmark
+    report: str | None = None                            # match: the report page
 
     @property
     def shapes_per_minute(self) -> float | None:
@@ -54,7 +59,7 @@ class BatchSummary:
                 "failed": self.failed, "seconds": self.seconds, "median_seconds": self.median_seconds,
                 "shapes_per_minute": self.shapes_per_minute, "where": self.where,
                 "most_symmetric": self.most_symmetric, "failures": self.failures, "epsilon": self.epsilon,
-                "epsilon_source": self.epsilon_source}
+                "epsilon_source": self.epsilon_source, "annotate_more": self.annotate_more, "report": self.report}
 
 
 def _failed_row(spec, digest, params, error) -> dict:
@@ -65,10 +70,11 @@ def _failed_row(spec, digest, params, error) -> dict:
     return row
 
 
-def _unreadable_row(spec, params, reason) -> dict:
-    """The error row of a shape file that this process cannot read (missing, a FIFO, no permission)."""
+def _unreadable_row(spec, params, reason, digest=None) -> dict:
+    """The error row of a shape file that this process cannot read (missing, a FIFO, no permission), or
+    whose landmarks it cannot read (``matches``)."""
     row = schema.empty_row()
-    row.update(file=spec, params=params, version=__version__, worker=worker_name(), error=reason)
+    row.update(file=spec, content_hash=digest, params=params, version=__version__, worker=worker_name(), error=reason)
     return row
 
 
@@ -107,8 +113,9 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
     options : the shape options of ``shapecond score`` (``points``, ``metric``,
         ``geodesic_backend``, ``seed``, ``largest_component``, ``no_cache``,
         ``target``, ``target_factor``, ``symmetry_map``), ``effort`` and ``epsilon`` (the level of
-        δ for every shape in diameters, or "collection": read off the collection, ``api.level.collection_level``).
-    what : ``score``, ``local``, ``landmarks:K:METHOD`` (``rows.parse_what``).
+        δ for every shape in diameters, or "collection": read off the collection, ``api.level.collection_level``);
+        with ``match:TEMPLATE``, ``matcher`` and ``landmark_table`` (a CSV file ``shape,label,vertex``).
+    what : ``score``, ``local``, ``landmarks:K:METHOD``, ``match:TEMPLATE`` (``rows.parse_what``).
     **how : the fields of ``BatchRun`` (``n_jobs``, ``scheduler``, ``resume``, ``overwrite``, ``progress``).
     """
     t0 = time.perf_counter()
@@ -117,24 +124,38 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
     table_format(out)
     check_where(how.n_jobs, how.scheduler)
     specs = expand_inputs(inputs)
+    plan = plan_matching(specs, options, out)
     with Table(out, how.mode) as table:
         hashes = content_hashes(specs)
         options, source = _level(options, [s for s, (_, why) in zip(specs, hashes) if not why])
-        params = params_key(options)
+        params = {s: p for s, p in zip(specs, plan.params(params_key(options), specs))}
         have = {schema.row_key(r): r for r in table.rows}
-        keys = [(s, h, params) for s, (h, _) in zip(specs, hashes)]
-        unreadable = {s: why for s, (_, why) in zip(specs, hashes) if why}
+        keys = [(s, h, params[s]) for s, (h, _) in zip(specs, hashes)]
+        unreadable = plan.errors | {s: why for s, (_, why) in zip(specs, hashes) if why}
         todo = [k for k in keys if k not in have]
-        for spec, _, _ in todo:  # the client cannot read it either: no worker would do better
+        for spec, digest, _ in todo:  # the client cannot read it either: no worker would do better
             if spec in unreadable:
-                table.append(_unreadable_row(spec, params, unreadable[spec]))
+                table.append(_unreadable_row(spec, params[spec], unreadable[spec], digest))
         readable = [k for k in todo if k[0] not in unreadable]
-        where = (_score(table, readable, options, how) if readable
+        where = (_score(table, readable, options, how, plan) if readable
                  else "this process" if todo else "nothing to do")
         done = {schema.row_key(r): r for r in table.rows}
         batch_rows = [done[k] for k in keys]
     summary = _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)
+    if plan.template:
+        summary = replace(summary, annotate_more=_annotate_more(batch_rows),
+                          report=_short(str(write_report(out, batch_rows))))
     return replace(summary, epsilon=options["epsilon"], epsilon_source=source or summary.epsilon_source)
+
+
+def _annotate_more(rows) -> list[dict]:
+    """The matched shapes whose bar says "annotate more" (``api.collection.ANNOTATE_MORE``), worst first."""
+    from ..api.collection import ANNOTATE_MORE
+
+    bad = sorted((r for r in rows if r["error"] is None and r["bar"] is not None and r["bar"] > ANNOTATE_MORE),
+                 key=lambda r: (-r["bar"], r["file"]))
+    return [{"file": _short(r["file"]), "bar": r["bar"], "source_id": r["suggest_source_id"],
+             "image_id": r["suggest_image_id"], "bar_after": r["suggest_bar_after"]} for r in bad]
 
 
 def _level(options: dict, readable: list) -> tuple[dict, str | None]:
@@ -158,16 +179,17 @@ def _collection_level(specs: list, options: dict):
                             force=options["force"], largest_component=options["largest_component"])
 
 
-def _score(table, todo, options, how: BatchRun) -> str:
+def _score(table, todo, options, how: BatchRun, plan: MatchPlan) -> str:
     from tqdm import tqdm
 
-    tasks = [(shape_row, (spec, digest, options, params), {}) for spec, digest, params in todo]
+    tasks = [(shape_row, (spec, digest, options, params), plan.task_kwargs(spec)) for spec, digest, params in todo]
     failed = 0
     with runner(how.n_jobs, how.scheduler) as run, \
             tqdm(total=len(tasks), desc="scoring", unit="shape", disable=not how.progress) as bar:
         for i, row, error in run.iter_tasks(tasks):
             if error is not None:
                 row = _failed_row(*todo[i], error)
+            plan.write_map(row)
             table.append(row)
             failed += row["error"] is not None
             bar.set_postfix(failed=failed, refresh=False)
@@ -209,6 +231,10 @@ def format_summary(s: BatchSummary) -> str:
     if s.most_symmetric:
         lines.append("most symmetric (sigma_hat, resolution flag):")
         lines += [f"  {num(r['sigma_hat']):>8}  {r['resolution'] or '-':28s} {r['file']}" for r in s.most_symmetric]
+    if s.report:
+        lines.append(f"report      {s.report}: {len(s.annotate_more)} maps say annotate more (bar > 0.05 sqrt(area))")
+        lines += [f"  {num(r['bar']):>8}  {r['file']}: next template vertex {r['source_id']} "
+                  f"(image {r['image_id']}), bar after {num(r['bar_after'])}" for r in s.annotate_more[:SUMMARY_TOP]]
     if s.failures:
         lines.append(f"failed ({s.failed}; the first {len(s.failures)}):" if s.failed > len(s.failures)
                      else "failed:")

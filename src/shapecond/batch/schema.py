@@ -6,7 +6,8 @@ empty cell / ``null``, and an infinite score as ``inf`` / ``"inf"``).  Values
 come from the code paths of the single-shape commands: ``info``
 (``shapes.io.describe_input``), ``score`` (``shapecond.api.score``),
 ``local`` (``deformation.local_score_of_geometry``) and ``landmarks``
-(``selection.select_landmarks``).  A row is identified by its file, the file's
+(``selection.select_landmarks``) and ``match``
+(``shapecond.api.collection.match_to_template``).  A row is identified by its file, the file's
 content hash and the parameters (``KEY``): ``--resume`` skips a shape whose
 key already has a row.
 """
@@ -75,7 +76,24 @@ SCALE_AWARE_COLUMNS: tuple = (
     Column("delta_moved", "float64", "fraction of the samples the δ witness moves"),
 )
 
-ALL_COLUMNS = COLUMNS + SCALE_AWARE_COLUMNS
+# One template matched to the shape (--what match:TEMPLATE; api.collection.match_to_template).
+MATCH_COLUMNS: tuple = (
+    Column("match_template", "string", "absolute path of the template matched to the shape"),
+    Column("match_direction", "string", "'template to shape': the map gives the shape's vertex id of each "
+                                        "template vertex id"),
+    Column("map_file", "string", "the map's file (maps/NAME.txt beside the table; one shape id a line)"),
+    Column("landmark_pairs", "int64", "landmark pairs used: the labels the shape shares with the template"),
+    Column("landmark_labels", "string", "those labels, in the template's order, joined by ' '"),
+    Column("bar", "float64", "the map's error bar: mean error it may have, in sqrt(area) of the template; "
+                             "above 0.05 the report says 'annotate more'"),
+    Column("bar_epsilon", "float64", "the distortion level ε of the bar (sqrt(area))"),
+    Column("bar_epsilon_hat", "float64", "ε̂, the map's own RMS distortion (sqrt(area))"),
+    Column("suggest_source_id", "int64", "the next landmark to annotate: template vertex id"),
+    Column("suggest_image_id", "int64", "its provisional image under the map: shape vertex id"),
+    Column("suggest_bar_after", "float64", "the bar expected once that landmark is added"),
+)
+
+ALL_COLUMNS = COLUMNS + SCALE_AWARE_COLUMNS + MATCH_COLUMNS
 NAMES = tuple(c.name for c in ALL_COLUMNS)
 TYPES = {c.name: c.type for c in ALL_COLUMNS}
 KEY = ("file", "content_hash", "params")

@@ -9,6 +9,7 @@ import click
 
 from ..batch import format_summary, run_batch
 from ..errors import InputError
+from ..matching.pipeline import MATCHERS
 from .common import Float, emit_json, json_option, pop_shape_options, progress_enabled, shape_options
 
 #: Exit status when some shapes failed (their rows hold the error).
@@ -25,7 +26,14 @@ EXIT_SOME_FAILED = 3
               show_default=True, help="Work spent by the witness searches.")
 @click.option("--what", "what", multiple=True, default=("score",), show_default=True,
               help="What to compute besides info, repeatable or comma-separated: score, local, "
-                   "landmarks:K:METHOD (e.g. landmarks:5:fps).")
+                   "landmarks:K:METHOD (e.g. landmarks:5:fps), match:TEMPLATE (the template matched to every "
+                   "shape with the landmarks of NAME.lmk files or --landmarks; maps in maps/ and report.html "
+                   "beside --out).")
+@click.option("--matcher", type=click.Choice(MATCHERS), default=None,
+              help="match:TEMPLATE: the sample matcher of shapecond match [default: lh05].")
+@click.option("--landmarks", "landmark_table", type=click.Path(dir_okay=False), default=None,
+              help="match:TEMPLATE: a CSV file with columns shape,label,vertex (0-based ids) instead of a "
+                   "NAME.lmk file (lines 'LABEL VERTEX_ID') beside each shape.")
 @click.option("--epsilon", type=Float(0.0), default=None,
               help="Distortion level ε of δ(ε) for every shape, RMS, in diameters [default: each shape's median "
                    "sample spacing].")
@@ -44,8 +52,9 @@ def command(inputs, out, what, as_json, **kw):
     """Score every shape in INPUT... (files, folders, glob patterns) into one table.
 
     One row per shape with info's counts and problems, the global score, and on
-    request the local score and landmarks; a shape that fails gets an error row
-    and the batch goes on.  Exit status 0 when every shape was scored, 3 when
+    request the local score and landmarks, or the map from a template (match:TEMPLATE:
+    template -> shape, landmarks paired by label, the error bar and the next landmark
+    to annotate); a shape that fails gets an error row and the batch goes on.  Exit status 0 when every shape was scored, 3 when
     some failed.
     """
     if kw["resume"] and kw["overwrite"]:
@@ -53,7 +62,7 @@ def command(inputs, out, what, as_json, **kw):
     if kw["epsilon"] is not None and kw["epsilon_collection"]:
         raise InputError("give --epsilon or --epsilon-from-collection, not both")
     options = pop_shape_options(kw)
-    options["effort"] = kw["effort"]
+    options.update(effort=kw["effort"], matcher=kw["matcher"], landmark_table=kw["landmark_table"])
     options["epsilon"] = "collection" if kw["epsilon_collection"] else kw["epsilon"]
     summary = run_batch(inputs, out, options, what=what, n_jobs=kw["jobs"], scheduler=kw["scheduler"],
                         resume=kw["resume"], overwrite=kw["overwrite"], progress=progress_enabled())
