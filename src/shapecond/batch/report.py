@@ -69,13 +69,13 @@ def report_html(rows: list[dict]) -> str:
     more = [r for r in ok if r["bar"] > ANNOTATE_MORE]
     template = next((r["match_template"] for r in rows if r.get("match_template")), None)
     name = {r["file"]: Path(r["file"]).stem for r in rows}
-    out = [f"<p>Template {html.escape(str(template or '?'))} matched to {len(rows)} shapes (direction: template to "
-           f"shape; every map gives the shape's vertex id of each template vertex id): {len(ok)} matched, "
-           f"{len(more)} of them say <b>annotate more</b>, {len(failed)} failed.</p>",
-           f"<p>The bar is the mean error a map that fits the landmarks and distorts distances no more than this one "
-           f"may have, in units of the template's sqrt(area) (it held the true error in 92 % of held-out pairs). "
-           f"Above {ANNOTATE_MORE:g} sqrt(area), where the shape-correspondence literature counts a map as "
-           f"failed, the report says annotate more.</p>",
+    out = [(f"<p>Template {html.escape(str(template or '?'))} matched to {len(rows)} shapes (direction: template to "
+            f"shape; every map gives the shape's vertex id of each template vertex id): {len(ok)} matched, "
+            f"{len(more)} of them say <b>annotate more</b>, {len(failed)} failed.</p>"),
+           ("<p>The bar is the mean error a map that fits the landmarks and distorts distances no more than this one "
+            "may have, in units of the template's sqrt(area) (it held the true error in 92 % of held-out pairs). "
+            f"Above {ANNOTATE_MORE:g} sqrt(area), where the shape-correspondence literature counts a map as "
+            "failed, the report says annotate more.</p>"),
            _histogram([r["bar"] for r in ok], ANNOTATE_MORE), "<h2>Annotate more</h2>"]
     out.append(_table(["shape", "bar", "pairs", "next landmark: template vertex", "its provisional image",
                        "bar after"],
