@@ -9,12 +9,13 @@ import pytest
 import shapecond
 
 MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.settings",
-           "shapecond.api.matching", "shapecond.api.level",
+           "shapecond.api.matching", "shapecond.api.level", "shapecond.api.collection",
            "shapecond.evaluation.run", "shapecond.checks", "shapecond.jsonable", "shapecond.output",
            "shapecond.symmetry.verdict"]
 
 
-@pytest.mark.parametrize("name", [pytest.param(m, marks=pytest.mark.slow) if m == "shapecond.api.matching" else m
+@pytest.mark.parametrize("name", [pytest.param(m, marks=pytest.mark.slow)
+                                  if m in ("shapecond.api.matching", "shapecond.api.collection") else m
                                   for m in MODULES])
 def test_examples_run(name, tmp_path, monkeypatch):
     monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path))

@@ -181,8 +181,18 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, **match
 
     Examples
     --------
+    >>> import pathlib, tempfile
     >>> import shapecond as sc
-    >>> table, maps = sc.match_collection("template.off", ["a.off", "b.off"], n_points=60)  # doctest: +SKIP
+    >>> from shapecond.shapes.io import write_mesh
+    >>> folder, g = pathlib.Path(tempfile.mkdtemp()), sc.load("demo:animal")
+    >>> for name in ("template", "cat"):
+    ...     write_mesh(folder / f"{name}.off", g.vertices, g.faces)
+    ...     _ = (folder / f"{name}.lmk").write_text("nose 0\\ntail 100\\npaw 200\\n")
+    >>> table, maps = sc.match_collection(folder / "template.off", [folder / "cat.off"], n_points=40)
+    >>> table[0]["landmark_pairs"] if isinstance(table, list) else int(table["landmark_pairs"][0])
+    3
+    >>> maps["cat"].shape == (g.n_vertices,)
+    True
     """
     table = read_landmark_csv(landmarks) if isinstance(landmarks, (str, os.PathLike)) else landmarks
     if table is not None and not isinstance(table, dict):
