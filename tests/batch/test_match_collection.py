@@ -207,3 +207,20 @@ def test_match_collection_api(collection, tmp_path):
     assert maps["s1"].shape == (n["template"],)
     with pytest.raises(InputError, match="named 's1'"):
         sc.match_collection(root / "template.off", [root / "s1.off", tmp_path / "s1.off"])
+
+
+def test_a_landmark_table_through_the_command_line(collection, tmp_path, capsys):
+    root, _ = collection
+    table = tmp_path / "landmarks.csv"
+    table.write_text("shape,label,vertex\ntemplate,a,0\ntemplate,b,5\ntemplate,c,9\ns1.off,a,3\ns1.off,c,4\n")
+    out = tmp_path / "t.jsonl"
+    code, stdout, _ = run_cli(capsys, "batch", root / "s1.off", root / "bare.off", "--what",
+                              f"match:{root / 'template.off'}", "--landmarks", table, "--matcher", "zoomout",
+                              "--out", out, "--json")
+    assert code == 3
+    summary = json.loads(stdout)
+    assert summary["failed"] == 2 and summary["annotate_more"] == [] and summary["report"].endswith("report.html")
+    rows = _rows(out)
+    assert "2 landmark labels shared with the template (the landmark table's rows of s1.off)" in rows["s1.off"]["error"]
+    assert "no landmarks for this shape" in rows["bare.off"]["error"]
+    assert json.loads(rows["s1.off"]["params"])["matcher"] == "zoomout"
