@@ -6,8 +6,8 @@ whose (file, content hash, parameters) already have a row when resuming, runs
 one ``rows.shape_row`` task per remaining shape through ``parallel.runner``
 (this process, local processes or a Dask cluster), and appends each row as it
 arrives.  With ``match:TEMPLATE`` (``matches``) each row's map is written
-(atomically) before its row, and ``report.html`` is written beside the table.  A shape that fails, or whose worker dies, becomes an error row; the
-batch goes on.
+(atomically) before its row, and ``report.html`` is written beside the table.
+A shape that fails, or whose worker dies, becomes an error row; the batch goes on.
 """
 
 from __future__ import annotations

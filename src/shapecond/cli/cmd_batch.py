@@ -54,8 +54,8 @@ def command(inputs, out, what, as_json, **kw):
     One row per shape with info's counts and problems, the global score, and on
     request the local score and landmarks, or the map from a template (match:TEMPLATE:
     template -> shape, landmarks paired by label, the error bar and the next landmark
-    to annotate); a shape that fails gets an error row and the batch goes on.  Exit status 0 when every shape was scored, 3 when
-    some failed.
+    to annotate); a shape that fails gets an error row and the batch goes on.  Exit
+    status 0 when every shape was scored, 3 when some failed.
     """
     if kw["resume"] and kw["overwrite"]:
         raise InputError("--resume and --overwrite exclude each other")
