@@ -1,9 +1,13 @@
 """``shapecond batch``: inputs, the row of one shape, the output table, resuming, errors."""
 
+import fcntl
 import json
 import math
 import os
 import re
+import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -233,3 +237,37 @@ def test_delta_at_a_given_level_or_at_the_collections_own_level(tmp_path, capsys
     assert all(json.loads(r["params"])["epsilon"] == pytest.approx(s["epsilon"]) for r in rows)
     code, out, err = run_cli(capsys, "batch", shapes[0], "-o", tmp_path / "one.csv", *base, "--epsilon-from-collection")
     assert code == 2 and "at least two readable shapes" in err and not (tmp_path / "one.csv").exists()
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_a_lock_whose_named_batch_is_dead_is_taken_over(tmp_path, suffix):
+    """A process left by a killed batch (e.g. a helper it forked) held its lock: every --resume was refused,
+    naming the dead batch."""
+    path = tmp_path / f"t{suffix}"
+    lock = tmp_path / f".t{suffix}.lock"
+    lock.write_text(f"host {socket.gethostname()}, pid {_dead_pid()}\n")
+    fd = os.open(lock, os.O_RDWR)
+    fcntl.flock(fd, fcntl.LOCK_EX)  # the left process's hold on the dead batch's lock
+    try:
+        with pytest.warns(UserWarning, match="took over the lock of a batch that is no longer running"):
+            with Table(path, "resume") as table:
+                table.append(table_row(1))
+                assert f"pid {os.getpid()}" in lock.read_text()
+        assert len(read_table(path)) == 1
+        lock.write_text(f"host {socket.gethostname()}, pid {os.getpid()}\n")  # a live holder: refused
+        fd2 = os.open(lock, os.O_RDWR)
+        fcntl.flock(fd2, fcntl.LOCK_EX)
+        try:
+            with pytest.raises(InputError, match="being written by another batch"):
+                with Table(path, "resume"):
+                    pass
+        finally:
+            os.close(fd2)
+    finally:
+        os.close(fd)
