@@ -233,3 +233,21 @@ def test_the_cache_folder_is_written_through_the_writer(tmp_path, monkeypatch):
     cache.save_arrays("x", "k" * 32, {"a": np.arange(3)})
     assert cache.load_arrays("x", "k" * 32, {"a": (3,)})["a"].tolist() == [0, 1, 2]
     assert sorted(p.name for p in tmp_path.iterdir()) == [cache.SECRET_NAME, f"x-{'k' * 32}.npz"]
+
+
+def test_check_distinct_refuses_an_input_or_a_repeated_output_through_links(tmp_path):
+    from shapecond.errors import InputError
+    from shapecond.output import check_distinct
+
+    mesh = tmp_path / "in.off"
+    mesh.write_text("OFF\n")
+    (tmp_path / "link.off").symlink_to(mesh)
+    os.link(mesh, tmp_path / "hard.off")
+    for out in ("in.off", "link.off", "hard.off", "sub/../in.off"):
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        with pytest.raises(InputError, match="an output may not overwrite an input"):
+            check_distinct([("--html", tmp_path / out)], [("INPUT", str(mesh))])
+    with pytest.raises(InputError, match="give each output its own file"):
+        check_distinct([("-o", tmp_path / "new.txt"), ("--html", tmp_path / "sub" / ".." / "new.txt")])
+    check_distinct([("-o", tmp_path / "a.txt"), ("--html", tmp_path / "b.html")], [("INPUT", "demo:blob")])
+    check_distinct([("-o", "/dev/null"), ("--html", "/dev/null")])  # streams are never replaced

@@ -29,6 +29,12 @@ by :func:`atomic_open`:
 * a failure (a full disk, no permission, a folder in the way) raises one
   :class:`~shapecond.errors.OutputError` naming the file.
 
+Before any work, :func:`check_distinct` refuses an output that is one of the
+command's inputs or another of its outputs (the same file by device and inode,
+through links; a path that does not exist yet by its resolved location).
+Streams (``/dev/null``, ``/dev/stdout``, a FIFO) are never replaced, so they
+may take several outputs.
+
 Examples
 --------
 >>> import tempfile, pathlib
@@ -262,6 +268,46 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
             handle.close()
         with contextlib.suppress(OSError):
             os.close(fd)
+
+
+def _identity(path):
+    """What ``path`` is as a file: ("file", device, inode) through links, ("new", resolved path) when it does
+    not exist, None for a stream or folder (never replaced by a write)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return ("new", os.path.realpath(os.path.abspath(path)))
+    return ("file", st.st_dev, st.st_ino) if stat.S_ISREG(st.st_mode) else None
+
+
+def check_distinct(outputs, inputs=()) -> None:
+    """Refuse, in one line, an output that is an input or another output (module docstring).
+
+    Parameters
+    ----------
+    outputs : (label, path) pairs, e.g. ``("--html", "page.html")``.
+    inputs : (label, path) pairs of the files read; names that are not files are ignored.
+
+    Raises
+    ------
+    InputError
+        naming the output and the input or output it is.
+    """
+    seen = {}
+    for label, path in inputs:
+        ident = _identity(path)
+        if ident is not None and ident[0] == "file":
+            seen.setdefault(ident, f"the input {label} ({path})")
+    for label, path in outputs:
+        ident = _identity(path)
+        if ident is None:
+            continue
+        if ident in seen:
+            what = seen[ident]
+            hint = "an output may not overwrite an input" if what.startswith("the input") else \
+                "give each output its own file"
+            raise InputError(f"{label} {path}: it is {what}; {hint}")
+        seen[ident] = f"the output {label} ({path})"
 
 
 def write_bytes(path, data: bytes, make_parents: bool = True) -> Path:

@@ -173,6 +173,13 @@ def make_files(folder) -> dict:
     np.savez(d / "npz_without_D.npz", X=np.zeros(3))
     out["npz_without_D.npz"] = d / "npz_without_D.npz"
     out.update(_special_files(d))
+    (d / "good.off").write_text(_off(*_sphere()))  # a valid mesh and an id file, to be named as outputs too
+    (d / "good_ids").write_text("1\n")
+    out.update({"good.off": d / "good.off", "good_ids": d / "good_ids"})
+    for name, make in (("good_link.off", os.symlink), ("good_hardlink.off", os.link)):
+        if not os.path.lexists(d / name):
+            make(d / "good.off", d / name)
+        out[name] = d / name
     (d / "a_folder.off").mkdir(exist_ok=True)
     out["a_folder.off"] = d / "a_folder.off"
     out["missing.off"] = d / "missing.off"
@@ -370,6 +377,25 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
         ["batch", *small, "--out", f["planted_lock/.t.csv.lock"].parent / "t.csv"])
     add("batch output with a planted journal link",
         ["batch", *small, "--out", f["planted_journal/.t.parquet.journal"].parent / "t.parquet"])
+    # an output that is an input or another output (same file through links), or has no name
+    g = str(f["good.off"])
+    pair = ["match", GOOD, GOOD, "--landmarks-source", "0", "--landmarks-target", "0", "--points", "8", "--no-cache"]
+    add("output is the input: score --html", ["score", g, *SMALL, "--html", g])
+    add("output is the input through a link: score --witness-png", ["score", g, *SMALL, "--witness-png",
+                                                                     f["good_link.off"]])
+    add("output is the input through a hard link: landmarks --ply", ["landmarks", g, "-k", "2", "--method", "fps",
+                                                                      *SMALL, "--ply", f["good_hardlink.off"]])
+    add("output is the landmark file: heatmap --png", ["heatmap", GOOD, "--landmarks", f["good_ids"], *SMALL,
+                                                       "--png", f["good_ids"]])
+    add("output is the source: match -o", [*pair[:1], g, *pair[2:], "-o", g])
+    add("output is another output: match -o --html", [*pair, "-o", "OUT.txt", "--html", "OUT.txt"])
+    add("output is another output: score --html --witness-png", ["score", GOOD, *SMALL, "--html", "OUT.html",
+                                                                 "--witness-png", "OUT.html"])
+    add("output is another output: local --html --heatmap-png", ["local", GOOD, "--html", "OUT.x",
+                                                                 "--heatmap-png", "OUT.x"])
+    for argv in (["score", GOOD, *SMALL, "--html", ""], [*pair, "-o", "OUT.txt", "--doubt-ply", ""],
+                 [*pair, "-o", ""], ["heatmap", GOOD, *SMALL, "--png", ""], ["batch", GOOD, *SMALL, "--out", ""]):
+        add(f"output with an empty name: {argv[0]} {argv[-2]} ''", argv)
     add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
     add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
     for name in ("off_truncated_faces.off", "off_nan.off", "fifo.off"):  # the shape the level is read against

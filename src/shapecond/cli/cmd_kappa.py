@@ -11,11 +11,11 @@ from __future__ import annotations
 import click
 
 from ..api import kappa
-from .common import (IDS_HELP, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
+from .common import (IDS_HELP, Command, Float, Int, api_options, emit_json, fmt, info, json_option, parse_ids,
                      pop_shape_options, shape_options)
 
 
-@click.command("kappa")
+@click.command("kappa", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Vertex ids (row indices for a matrix) fixed by every map: "

@@ -14,11 +14,11 @@ import numpy as np
 from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLINGS
 from ..errors import InputError
 from ..output import atomic_open
-from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, SEED_OPTION, Int, emit_json,
-                     force_option, info, json_option, parse_ids, points_option)
+from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, SEED_OPTION, Command, Int, OutputFile,
+                     emit_json, force_option, info, json_option, parse_ids, points_option)
 
 
-@click.command("match")
+@click.command("match", cls=Command)
 @click.argument("source", metavar="SOURCE")
 @click.argument("target", metavar="TARGET")
 @click.option("--landmarks-source", required=True,
@@ -49,16 +49,16 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
 @click.option("--error-bar/--no-error-bar", default=True, show_default=True,
               help="Estimate the map's error without ground truth: δ(ε̂) on SOURCE with the landmarks fixed, ε̂ "
                    "the map's own RMS distortion (in the summary; the doubt field with --doubt-ply, --doubt-png).")
-@click.option("--doubt-png", type=click.Path(dir_okay=False), default=None,
+@click.option("--doubt-png", type=OutputFile(), default=None,
               help="Picture of SOURCE coloured by the error bar's doubt field (PNG), landmarks ringed.")
-@click.option("--doubt-ply", type=click.Path(dir_okay=False), default=None,
+@click.option("--doubt-ply", type=OutputFile(), default=None,
               help="SOURCE coloured by the error bar's doubt field: how far the widest map as distorted as this "
                    "one moves each point (PLY).")
 @LARGEST_COMPONENT_OPTION
 @NO_CACHE_OPTION
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+@click.option("-o", "--output", required=True, type=OutputFile(),
               help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
-@click.option("--html", type=click.Path(dir_okay=False), default=None,
+@click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the map: colours carried source -> target, linked landmarks.")
 @click.option("--truth", default=None,
               help="--html: ground-truth map (a file like -o's, or 'same-ids' for shapes with a common vertex "

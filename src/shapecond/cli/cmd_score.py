@@ -17,11 +17,11 @@ import click
 import numpy as np
 
 from ..api import score
-from .common import IDS_HELP, Float, api_options, emit_json, epsilon_options, fmt, info, json_option, parse_ids, \
-    pop_shape_options, resolve_epsilon, shape_options
+from .common import (IDS_HELP, Command, Float, OutputFile, api_options, emit_json, epsilon_options, fmt, info,
+                     json_option, parse_ids, pop_shape_options, resolve_epsilon, shape_options)
 
 
-@click.command("score")
+@click.command("score", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Input vertex ids (row indices for a matrix) fixed by every "
@@ -33,12 +33,12 @@ from .common import IDS_HELP, Float, api_options, emit_json, epsilon_options, fm
               help="Seconds for each of the exact and LP solves.")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Work spent by the witness search.")
-@click.option("--witness-png", type=click.Path(dir_okay=False), default=None,
+@click.option("--witness-png", type=OutputFile(), default=None,
               help="Write a picture of the witness map (meshes and point clouds).")
 @epsilon_options("")
-@click.option("--scale-witness-png", type=click.Path(dir_okay=False), default=None,
+@click.option("--scale-witness-png", type=OutputFile(), default=None,
               help="Write a picture of the scale-aware witness (the widest self-map within ε).")
-@click.option("--html", type=click.Path(dir_okay=False), default=None,
+@click.option("--html", type=OutputFile(), default=None,
               help="Write a self-contained HTML page of the witness maps (turn the shape, hover vertex ids).")
 @json_option
 def command(input_spec, **o):
