@@ -61,8 +61,11 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
 @click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the map: colours carried source -> target, linked landmarks.")
 @click.option("--truth", default=None,
-              help="--html: ground-truth map (a file like -o's, or 'same-ids' for shapes with a common vertex "
-                   "order) to show the error field.")
+              help="--html: the ground truth, to show the error field: a map file like -o's (line i: the true "
+                   "TARGET id of SOURCE vertex i; -1, and only -1, for none), 'same-ids' (shapes with a common "
+                   "vertex order), or SOURCE.vts,TARGET.vts, the two shapes' reference files of a remeshed "
+                   "release (the error is then known at the source's reference vertices). Read and checked "
+                   "before matching.")
 @force_option
 @json_option
 def command(source, target, landmarks_source, landmarks_target, output, **o):
@@ -81,8 +84,9 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
         raise InputError("--doubt-ply and --doubt-png show the error bar's doubt field: drop --no-error-bar")
     t0 = time.perf_counter()
     lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
-    result = match(source, target, parse_ids(landmarks_source, "--landmarks-source"),
-                   parse_ids(landmarks_target, "--landmarks-target"), matcher=o["matcher"], n_points=o["points"],
+    ids_s, ids_t = parse_ids(landmarks_source, "--landmarks-source"), parse_ids(landmarks_target, "--landmarks-target")
+    shapes = _surfaces_up_front(source, target, o)
+    result = match(*shapes, ids_s, ids_t, matcher=o["matcher"], n_points=o["points"],
                    seed=o["seed"], backend=o["geodesic_backend"], dense=o["dense"], samples=o["samples"],
                    cache=not o["no_cache"], force=o["force"], largest_component=o["largest_component"],
                    error_bar=o["error_bar"], **lh05)
@@ -94,9 +98,7 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     if o["doubt_png"]:
         info(f"wrote {result.plot(path=o['doubt_png'])}")
     if o["html"]:
-        from ..viz.pages import read_truth
-
-        info(f"wrote {result.to_html(o['html'], truth=read_truth(o['truth']))}")
+        info(f"wrote {result.to_html(o['html'], truth=o['truth'])}")
     summary = dict(result.summary, source=str(source), target=str(target), output=str(out),
                    seconds=time.perf_counter() - t0)
     if o["as_json"]:
@@ -106,6 +108,26 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
              f"{summary['n_landmarks']} landmarks, {summary['seconds']:.1f} s)")
         if "error_bar" in summary:
             info("error bar: " + summary["error_bar"]["text"])
+
+
+def _surfaces_up_front(source, target, o: dict) -> tuple:
+    """SOURCE and TARGET, loaded here when an output draws them: a distance matrix is refused and
+    ``--truth`` read and checked against both shapes (``o["truth"]`` becomes what it holds) before the
+    matching; otherwise the names, loaded by ``match``."""
+    drawn = [name for name in ("html", "doubt_ply", "doubt_png") if o[name]]
+    if not drawn:
+        return source, target
+    from ..api import load
+    from ..viz.pages import read_truth, truth_map
+
+    truth = read_truth(o["truth"])
+    shapes = tuple(load(x, largest_component=o["largest_component"], force=o["force"]) for x in (source, target))
+    if any(isinstance(x, np.ndarray) for x in shapes):
+        raise InputError(f"--{drawn[0].replace('_', '-')} draws the shapes, but a distance matrix has no surface")
+    if truth is not None:
+        truth_map(truth, *shapes)
+    o["truth"] = truth
+    return shapes
 
 
 def _write_doubt(result, path) -> None:
