@@ -175,6 +175,13 @@ def make_files(folder) -> dict:
     out.update(_special_files(d))
     (d / "good.off").write_text(_off(*_sphere()))  # a valid mesh and an id file, to be named as outputs too
     (d / "good_ids").write_text("1\n")
+    np.save(d / "matrix_good.npy", np.abs(np.subtract.outer(np.arange(8.0), np.arange(8.0))))
+    out["matrix_good.npy"] = d / "matrix_good.npy"
+    n_good = len(_sphere()[0])  # ground-truth maps of the 162-vertex good.off onto itself
+    for name, ids in (("truth_negative", [0, -5]), ("truth_range", list(range(n_good - 1)) + [n_good + 5]),
+                      ("truth_words", ["left", "paw"])):
+        (d / name).write_text("\n".join(map(str, ids)) + "\n")
+        out[name] = d / name
     out.update({"good.off": d / "good.off", "good_ids": d / "good_ids"})
     for name, make in (("good_link.off", os.symlink), ("good_hardlink.off", os.link)):
         if not os.path.lexists(d / name):
@@ -209,7 +216,9 @@ BAD_VTS = {"vts_short": ("1\n2\n3\n4\n", "1\n2\n3\n"),       # unequal reference
            "vts_zero_based": ("1\n2\n3\n4\n", "0\n1\n2\n3\n"),   # a 0: 0-based by mistake
            "vts_two_per_line": ("1\n2\n3\n4\n", "1 2\n3\n4\n1\n"),
            "vts_fraction": ("1\n2\n3\n4\n", "1\n2.5\n3\n4\n"),
-           "vts_missing": ("1\n2\n3\n4\n", None)}              # shape1 has no .vts
+           "vts_missing": ("1\n2\n3\n4\n", None),             # shape1 has no .vts
+           "vts_huge": ("1\n2\n3\n4\n", "1\n2\n3\n99999999999999999999999\n"),  # beyond int64
+           "vts_superscript": ("1\n2\n3\n4\n", "1\n2\n3\n\u00b2\n")}  # '²'.isdigit() is True
 
 
 def _remeshed_datasets(d, good) -> dict:
@@ -221,7 +230,7 @@ def _remeshed_datasets(d, good) -> dict:
         for name, vts in (("shape0", first), ("shape1", second)):
             (cls / "shapes" / f"{name}.off").write_text(good)
             if vts is not None:
-                (cls / "corres" / f"{name}.vts").write_text(vts)
+                (cls / "corres" / f"{name}.vts").write_text(vts, encoding="utf-8")
         out[f"dataset_{kind}"] = d / f"dataset_{kind}"
     plain = d / "dataset_no_corres" / "cls"  # a class with one vertex order asked for the remeshed protocol
     plain.mkdir(parents=True, exist_ok=True)
@@ -393,6 +402,18 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
                                                                  "--witness-png", "OUT.html"])
     add("output is another output: local --html --heatmap-png", ["local", GOOD, "--html", "OUT.x",
                                                                  "--heatmap-png", "OUT.x"])
+    # --truth and drawings, refused before the matching (-o was written first)
+    gg = ["match", g, g, "--landmarks-source", "0", "--landmarks-target", "0", "--points", "8", "--no-cache",
+          "-o", "OUT.txt", "--html", "OUT.html", "--truth"]
+    for name in ("ids_fifo", "dev_zero.off", "truth_negative", "truth_range", "truth_words", "missing.off"):
+        add(f"match --truth {name}", gg + [f[name]])
+    vts = f["dataset_vts_short"] / "cls" / "corres"
+    add("match --truth of two .vts files of unequal counts", gg + [f"{vts / 'shape0.vts'},{vts / 'shape1.vts'}"])
+    add("match --truth of two files that are not .vts", gg + [f"{g},{g}"])
+    m = str(f["matrix_good.npy"])
+    for option in ("--doubt-ply", "--html", "--doubt-png"):
+        add(f"match of distance matrices {option}", ["match", m, m, "--landmarks-source", "0", "--landmarks-target",
+                                                     "0", "-o", "OUT.txt", option, "OUT.x"])
     for argv in (["score", GOOD, *SMALL, "--html", ""], [*pair, "-o", "OUT.txt", "--doubt-ply", ""],
                  [*pair, "-o", ""], ["heatmap", GOOD, *SMALL, "--png", ""], ["batch", GOOD, *SMALL, "--out", ""]):
         add(f"output with an empty name: {argv[0]} {argv[-2]} ''", argv)
