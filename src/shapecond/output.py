@@ -223,6 +223,8 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
     """
     if mode not in ("wb", "w"):
         raise ValueError("mode must be 'wb' or 'w'")
+    if not isinstance(path, (str, os.PathLike)) or not isinstance(os.fspath(path), str) or not os.fspath(path):
+        raise InputError(f"an output must be a file name (str or path), got {path!r:.40}")
     path = Path(os.fspath(path))
     kind = _stream_kind(path)
     if kind == "folder":

@@ -432,6 +432,24 @@ def time_limit(cls: str) -> float:
     return 10.0 if any(w in cls for w in ("fifo", "dev_zero", "batch output")) else 300.0
 
 
+_RESULTS: dict = {}
+
+
+def _result(kind: str):
+    """A small result of each public function (made once, when a case first needs it)."""
+    import shapecond as sc
+
+    if kind not in _RESULTS:
+        _RESULTS[kind] = {
+            "score": lambda: sc.score(GOOD, 8, cache=False),
+            "heatmap": lambda: sc.heatmap(GOOD, n_points=8, cache=False),
+            "landmarks": lambda: sc.landmarks(GOOD, 2, "fps", 8, cache=False),
+            "match": lambda: sc.match(GOOD, GOOD, [0, 5, 9], [0, 5, 9], n_points=8, cache=False, error_bar=True),
+            "local_score": lambda: sc.local_score(GOOD, [0, 5, 9]),
+        }[kind]()
+    return _RESULTS[kind]
+
+
 def api_cases(folder) -> list[tuple[str, object]]:
     """(class, zero-argument callable) pairs that must raise one ``InputError``."""
     import shapecond as sc
@@ -483,6 +501,10 @@ def api_cases(folder) -> list[tuple[str, object]]:
         ("evaluate n_jobs 0", lambda: sc.evaluate(f["dataset_garbage"], cache=False, n_jobs=0)),
         *[(f"evaluate remeshed {kind}", lambda kind=kind: sc.evaluate(f[f"dataset_{kind}"], cache=False))
           for kind in BAD_VTS],
+        *[(f"{kind} result .{call}", lambda kind=kind, call=call: eval(f"r.{call}", {"r": _result(kind),
+                                                                                  "p": Path(folder) / "out" / "x"}))
+          for kind in ("score", "heatmap", "landmarks", "match", "local_score")
+          for call in ("to_html(123)", "to_html(p, bogus=1)", "plot(fig='x')", "plot(path=123)", "to_html('')")],
         ("match zoomout with 2 landmarks", lambda: sc.match(GOOD, GOOD, [0, 1], [0, 1], matcher="zoomout",
                                                            cache=False)),
         ("match zoomout on matrices", lambda: sc.match(np.ones((4, 4)) - np.eye(4), np.ones((4, 4)) - np.eye(4),

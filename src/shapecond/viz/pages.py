@@ -350,9 +350,31 @@ def demo_page(shape, score, small, values, chosen) -> str:
 
 # --- results of the Python interface ------------------------------------------------------------
 
+def _check_options(kw: dict, fn, given=()) -> None:
+    """Refuse in one line a keyword that the page function ``fn`` does not take (or that is set here)."""
+    import inspect
+
+    known = [p.name for p in inspect.signature(fn).parameters.values()
+             if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is not p.empty
+             and p.name not in given]
+    unknown = sorted(set(kw) - set(known))
+    if unknown:
+        raise InputError(f"to_html() got an unknown option {unknown[0]!r} (its options: {', '.join(known) or 'none'})")
+
+
+#: For each result type: the page function whose options ``to_html`` takes, and those it sets itself.
+_PAGE_OPTIONS = {"ScoreResult": ("score_page", ()), "HeatMapResult": ("heatmap_page", ("landmarks", "lines")),
+                 "LandmarkResult": ("landmarks_page", ()), "MatchResult": ("match_page", ("fields",)),
+                 "LocalResult": ("local_page", ("fixed", "result"))}
+
+
 def result_page(result, **kw) -> str:
     """The page of a result of ``shapecond``'s functions (score, heatmap, landmarks, match, local_score)."""
     kind = type(result).__name__
+    if kind in _PAGE_OPTIONS:
+        name, given = _PAGE_OPTIONS[kind]
+        _check_options({k: v for k, v in kw.items() if not (kind == "MatchResult" and k == "truth")},
+                       globals()[name], given)
     if kind == "ScoreResult":
         return score_page(result, **kw)
     if kind == "HeatMapResult":
