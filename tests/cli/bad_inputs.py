@@ -505,6 +505,10 @@ def api_cases(folder) -> list[tuple[str, object]]:
                                                                                   "p": Path(folder) / "out" / "x"}))
           for kind in ("score", "heatmap", "landmarks", "match", "local_score")
           for call in ("to_html(123)", "to_html(p, bogus=1)", "plot(fig='x')", "plot(path=123)", "to_html('')")],
+        *[(f"heatmap epsilon {e!r}", lambda e=e: sc.heatmap(GOOD, n_points=8, epsilon=e, cache=False))
+          for e in ("abc", float("inf"), float("nan"), -1.0)],
+        *[(f"landmarks {m} epsilon {e!r}", lambda m=m, e=e: sc.landmarks(GOOD, 2, m, 8, epsilon=e, cache=False))
+          for m in ("fps", "cnbs-scale") for e in ("abc", float("inf"), float("nan"))],
         ("match zoomout with 2 landmarks", lambda: sc.match(GOOD, GOOD, [0, 1], [0, 1], matcher="zoomout",
                                                            cache=False)),
         ("match zoomout on matrices", lambda: sc.match(np.ones((4, 4)) - np.eye(4), np.ones((4, 4)) - np.eye(4),
