@@ -12,7 +12,7 @@ included): it closes every descriptor it inherited but its own end of the pipe
 and the standard streams (the parent's end of the pipe, so that a dead parent is
 an end of file; an output's lock, so that no lock outlives its writer), asks
 the kernel for SIGKILL when its parent ends (Linux ``PR_SET_PDEATHSIG``,
-``parallel.die_with_parent``) and elsewhere polls ``os.getppid()`` twice a
+``die_with_parent``) and elsewhere polls ``os.getppid()`` twice a
 second.
 
 Only the main process of a program forks a helper (a joblib or multiprocessing
@@ -64,12 +64,32 @@ def _close_inherited(keep) -> None:
                 pass
 
 
+def die_with_parent(parent_pid: int) -> bool:
+    """Make this worker process end when its parent does (Linux ``PR_SET_PDEATHSIG``).
+
+    Called at the start of every task run by a pool of worker processes
+    (``parallel``), and by the forked geodesic helper, so that killing the command
+    (even with SIGKILL) does not leave its workers running.  Returns whether the
+    kernel will send the signal (False where ``prctl`` is not available: the
+    caller may watch ``os.getppid()`` itself).
+    """
+    import ctypes
+    import signal
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        armed = libc.prctl(1, int(signal.SIGKILL), 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):  # pragma: no cover - not Linux
+        return False
+    if os.getppid() != parent_pid:  # the parent died before the signal was armed
+        os._exit(1)
+    return armed
+
+
 def _watch_parent(parent_pid: int) -> None:
     """End this process when its parent is gone: the kernel's signal, or a thread that polls."""
     import threading
     import time
-
-    from ..parallel import die_with_parent
 
     if die_with_parent(parent_pid):
         return
