@@ -271,3 +271,19 @@ def test_a_lock_whose_named_batch_is_dead_is_taken_over(tmp_path, suffix):
             os.close(fd2)
     finally:
         os.close(fd)
+
+
+@pytest.mark.slow
+def test_the_collections_level_comes_from_its_first_readable_shapes(tmp_path, capsys):
+    """batch bad.off a.off b.off --epsilon-from-collection stopped the whole batch on bad.off."""
+    (tmp_path / "bad.off").write_text("this is not a mesh\n")
+    shapes = [tmp_path / "bad.off", "demo:animal", "demo:animal:delta=0.1"]
+    code, out, err = run_cli(capsys, "batch", *shapes, "-o", tmp_path / "t.csv", "--points", 30, "--effort",
+                             "quick", "--no-cache", "--json", "--epsilon-from-collection")
+    assert code == 3, err  # the bad shape's error row; the others scored at the level of the two readable ones
+    s = json.loads(out)
+    assert s["epsilon_source"].startswith("the collection's level, read off 1 matched map(s)")
+    assert "bad.off: not used for the collection's level" in err
+    rows = read_table(tmp_path / "t.csv")
+    assert [bool(r["error"]) for r in rows] == [True, False, False]
+    assert all(r["delta_epsilon"] == pytest.approx(s["epsilon"]) for r in rows[1:])
