@@ -287,3 +287,21 @@ def test_the_collections_level_comes_from_its_first_readable_shapes(tmp_path, ca
     rows = read_table(tmp_path / "t.csv")
     assert [bool(r["error"]) for r in rows] == [True, False, False]
     assert all(r["delta_epsilon"] == pytest.approx(s["epsilon"]) for r in rows[1:])
+
+
+def test_links_loops_and_fifos_in_a_folder_are_never_dropped_without_a_word(tmp_path):
+    """A link to a folder (a loop among them) was skipped without a word; a FIFO or a file link loop is listed
+    and becomes an error row that says what it is."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "a.off").write_text("OFF\n")
+    (tmp_path / "sub" / "b.off").write_text("OFF\n")
+    os.symlink(".", tmp_path / "sub" / "self")
+    os.symlink(tmp_path / "sub", tmp_path / "linkdir")
+    os.mkfifo(tmp_path / "fifo.off")
+    os.symlink("loop.off", tmp_path / "loop.off")
+    with pytest.warns(UserWarning) as caught:
+        found = expand_inputs([tmp_path])
+    assert [os.path.relpath(p, tmp_path) for p in found] == ["a.off", "fifo.off", "loop.off", "sub/b.off"]
+    said = sorted(str(w.message).split(":")[0] for w in caught)
+    assert said == [str(tmp_path / "linkdir"), str(tmp_path / "sub" / "self")]
+    assert all("a link to a folder, not followed" in str(w.message) for w in caught)
