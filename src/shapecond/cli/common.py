@@ -112,6 +112,8 @@ class Command(click.Command):
                 inputs += [(_param_label(param), name) for name in _named_files(value)]
         check_distinct(outputs, inputs)
         return super().invoke(ctx)
+
+
 #: Largest N accepted by the options (the memory and time guards refuse far less).
 MAX_POINTS = 100_000
 

@@ -49,19 +49,11 @@ def helper_allowed() -> bool:
 PARENT_POLL = 0.5
 
 
-def _close_inherited(keep) -> None:
+def _close_inherited(keep: int) -> None:
     """Close every descriptor of this process above 2 except ``keep`` (module docstring)."""
-    fds = []
-    try:
-        fds = [int(name) for name in os.listdir("/proc/self/fd")]
-    except OSError:  # pragma: no cover - no /proc: every number up to the limit
-        fds = range(3, os.sysconf("SC_OPEN_MAX") if hasattr(os, "sysconf") else 1024)
-    for fd in fds:
-        if fd > 2 and fd not in keep:
-            try:
-                os.close(fd)
-            except OSError:
-                pass
+    top = os.sysconf("SC_OPEN_MAX") if hasattr(os, "sysconf") else 1 << 16
+    os.closerange(3, keep)
+    os.closerange(max(3, keep + 1), max(top, 3))
 
 
 def die_with_parent(parent_pid: int) -> bool:
@@ -104,7 +96,7 @@ def _watch_parent(parent_pid: int) -> None:
 
 def _serve(compute, conn, buffer, parent_end, parent_pid) -> None:  # pragma: no cover - the forked process
     parent_end.close()
-    _close_inherited({conn.fileno()})
+    _close_inherited(conn.fileno())
     _watch_parent(parent_pid)
     while True:
         try:
