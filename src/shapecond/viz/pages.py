@@ -508,7 +508,8 @@ def truth_map(truth, src, tgt) -> np.ndarray:
                 raise InputError(f"--truth {name}: vertex id {int(ids.max()) + 1} (1-based) is out of range for "
                                  f"{g.name} ({int(g.ids.max()) + 1} vertices)")
         s_int, t_int = _internal(src, truth.source), _internal(tgt, truth.target)
-        t[s_int[::-1]] = t_int[::-1]  # the first reference point of a vertex wins
+        vertices, first = np.unique(s_int, return_index=True)  # the first reference point of a vertex wins
+        t[vertices] = t_int[first]
         return t
     if isinstance(truth, str):  # "same-ids"
         truth = np.arange(n_ids)
