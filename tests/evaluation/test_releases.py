@@ -69,7 +69,7 @@ def test_a_pairs_list_groups_the_pairs_by_source_across_classes(tmp_path):
 
 @pytest.mark.slow
 def test_the_listed_pairs_are_evaluated_with_flips_and_the_pooled_table(tmp_path):
-    root = _flat(tmp_path / "vtx_5k")
+    _flat(tmp_path / "vtx_5k")
     ev = evaluate_dataset(tmp_path, methods=("fps",), matchers=("zoomout",), n_points=60, cache=False,
                           pairs=(("strip0", "plate2"), ("plate1", "strip9")), n_landmarks=4, counts=(3,),
                           error_bars=False)
@@ -107,3 +107,20 @@ def test_bad_releases_and_pairs_are_refused_in_one_line(tmp_path):
         find_classes(empty)
     with pytest.raises(InputError, match="either classes or a pairs list"):
         evaluate_dataset(tmp_path, classes=("strip",), pairs=(("strip0", "strip4"),))
+
+
+def test_two_shapes_of_one_name_and_unreadable_entries_are_refused_not_dropped(tmp_path):
+    import os
+
+    root = _flat(tmp_path / "vtx_5k", names=("strip0", "strip4"))
+    shutil.copy(root / "strip4.off", root / "strip4.ply")
+    with pytest.raises(InputError, match="two shapes named 'strip4'"):
+        find_classes(root)
+    (root / "strip4.ply").unlink()
+    os.mkfifo(root / "strip9.off")
+    with pytest.raises(InputError, match="strip9.off: not a regular file"):
+        find_classes(root)
+    (root / "strip9.off").unlink()
+    (root / "loop.off").symlink_to(root / "loop.off")
+    with pytest.raises(InputError, match="loop.off"):
+        find_classes(root)
