@@ -124,3 +124,17 @@ def test_two_shapes_of_one_name_and_unreadable_entries_are_refused_not_dropped(t
     (root / "loop.off").symlink_to(root / "loop.off")
     with pytest.raises(InputError, match="loop.off"):
         find_classes(root)
+
+
+def test_the_cli_refuses_a_bad_pairs_file_or_release_in_one_line_and_writes_nothing(tmp_path, capsys):
+    from tests.helpers import run_cli
+
+    root = _flat(tmp_path / "vtx_5k", names=("strip0", "strip4"))
+    out = tmp_path / "report"
+    (tmp_path / "pairs.txt").write_text("strip0 strip9\n")
+    for args, match in (((root, "--pairs", tmp_path / "pairs.txt"), "strip9"),
+                        ((root, "--pairs", tmp_path / "none.txt"), "none.txt"),
+                        ((root, "--pairs", tmp_path / "pairs.txt", "--classes", "strip"), "not both")):
+        code, stdout, err = run_cli(capsys, "evaluate", *args, "--out", out, "--methods", "fps", "-n", 20)
+        assert code == 2 and match in err and err.count("\n") == 1 and stdout == "", err
+        assert not out.exists()
