@@ -192,3 +192,31 @@ def test_a_fifo_planted_at_an_entry_is_skipped_without_blocking(folder):
     os.mkfifo(folder / f"landmarks-{key}.json")
     with deadline(10), pytest.warns(cache.CacheWarning, match="FIFO"):
         assert cache.load_json("landmarks", key) is None
+
+
+def test_clear_removes_only_the_caches_own_files(folder, capsys):
+    """Any *-*.json / *-*.npz counted as an entry: a user's files in the folder were deleted."""
+    _shape()
+    (entry,) = cache.entries()
+    planted = {"my-notes.json": b'{"note": 1}', "report-final.json": b'{"key": "x", "tag": "y", "payload": 1}'}
+    for name, data in planted.items():
+        (folder / name).write_bytes(data)
+    np.savez(folder / "scan-01.npz", V=np.zeros((3, 3)))
+    forged = folder / f"metric-{'0' * 32}.npz"  # named like an entry, but not one
+    np.savez(forged, D=np.zeros(2))
+    (folder / "notes.txt").write_text("keep me\n")
+    os.symlink(entry, folder / f"metric-{'1' * 32}.npz")  # a link named like an entry
+    code, out, _ = run_cli(capsys, "cache", "info", "--json")
+    report = json.loads(out)
+    assert report["entries"] == 1 and report["other_files"] == 6
+    code, out, err = run_cli(capsys, "cache", "clear")
+    assert code == 0 and "removed 1 entries" in out and "kept 6 files" in err
+    assert sorted(p.name for p in folder.iterdir()) == sorted(
+        ["my-notes.json", "report-final.json", "scan-01.npz", forged.name, "notes.txt", f"metric-{'1' * 32}.npz"])
+    assert (folder / "my-notes.json").read_bytes() == planted["my-notes.json"]
+
+
+def test_clear_keeps_a_file_at_the_secrets_name_that_is_not_a_secret(folder, capsys):
+    (folder / ".secret").write_text("my password list\n")
+    code, out, err = run_cli(capsys, "cache", "clear")
+    assert code == 0 and (folder / ".secret").read_text() == "my password list\n" and "kept 1 files" in err

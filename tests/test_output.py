@@ -254,3 +254,21 @@ def test_what_a_compiled_library_writes_to_fd_1_is_diverted_and_python_stdout_is
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == "python\nafter\nraw-after\n"
     assert proc.stderr == "raw\nc-stdio\n"
+
+
+def test_check_distinct_refuses_an_input_or_a_repeated_output_through_links(tmp_path):
+    from shapecond.errors import InputError
+    from shapecond.output import check_distinct
+
+    mesh = tmp_path / "in.off"
+    mesh.write_text("OFF\n")
+    (tmp_path / "link.off").symlink_to(mesh)
+    os.link(mesh, tmp_path / "hard.off")
+    for out in ("in.off", "link.off", "hard.off", "sub/../in.off"):
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        with pytest.raises(InputError, match="an output may not overwrite an input"):
+            check_distinct([("--html", tmp_path / out)], [("INPUT", str(mesh))])
+    with pytest.raises(InputError, match="give each output its own file"):
+        check_distinct([("-o", tmp_path / "new.txt"), ("--html", tmp_path / "sub" / ".." / "new.txt")])
+    check_distinct([("-o", tmp_path / "a.txt"), ("--html", tmp_path / "b.html")], [("INPUT", "demo:blob")])
+    check_distinct([("-o", "/dev/null"), ("--html", "/dev/null")])  # streams are never replaced

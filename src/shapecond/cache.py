@@ -33,8 +33,14 @@ as well change shapecond itself).  Workers that share a cache folder (``batch``
 and ``evaluate`` on a cluster) must therefore run as the same user; other users
 get a warning and compute without the cache.
 
-``shapecond cache info`` / ``shapecond cache clear`` show and empty the folder
-(``clear`` removes the secret too: a new one comes with the next entry).
+``shapecond cache info`` / ``shapecond cache clear`` show and empty the folder.
+Only the cache's own files count and are removed: an entry is recognised by its
+name (``KIND-KEY`` with a 32-hex-digit key) **and** its content (it is a regular
+file holding that same key and a 64-hex-digit checksum), so a user's
+``scan-01.npz`` or ``report-final.json`` in the folder, even one named like an
+entry, is kept and reported; ``clear`` also removes the cache's leftover
+temporary files and the secret (only if it is one: a private 32-byte file of
+the user's; a new one comes with the next entry).
 """
 
 from __future__ import annotations
@@ -44,6 +50,7 @@ import hmac
 import io
 import json
 import os
+import re
 import secrets
 import warnings
 from pathlib import Path
@@ -267,37 +274,85 @@ def _store(path: Path, data: bytes) -> None:
         _warn(f"cache not written ({exc}); the result will be recomputed next time")
 
 
+#: The name of an entry (``_path``) and of a temporary file of an entry or of the secret (``output``).
+ENTRY_NAME = re.compile(r"[a-z][a-z0-9_]*-[0-9a-f]{32}\.(npz|json)")
+TEMP_NAME = re.compile(r"\.([a-z][a-z0-9_]*-[0-9a-f]{32}\.(npz|json)|secret)\.[0-9a-f]{16}\.tmp")
+_HEX64 = re.compile(r"[0-9a-f]{64}")
+
+
+def is_entry(path: Path) -> bool:
+    """Whether ``path`` is an entry this cache wrote: its name and, inside, its key and checksum.
+
+    The checksum is not verified (an entry under a lost secret is still the
+    cache's own); a link, FIFO or folder is never an entry.
+    """
+    if not ENTRY_NAME.fullmatch(path.name):
+        return False
+    key = path.name.split("-", 1)[1].split(".", 1)[0]
+    try:
+        with _open_entry(path) as fh:
+            if path.suffix == ".json":
+                entry = json.loads(fh.read().decode("utf-8"))
+                return (isinstance(entry, dict) and entry.get("key") == key and "payload" in entry
+                        and bool(_HEX64.fullmatch(str(entry.get("tag")))))
+            with np.load(fh, allow_pickle=False) as z:
+                return (str(z["__key__"]) == key and bool(_HEX64.fullmatch(str(z["__tag__"]))))
+    except Exception:  # noqa: BLE001 - anything unreadable is not an entry of ours
+        return False
+
+
 def entries() -> list[Path]:
-    """Every cache entry in the folder."""
+    """Every cache entry in the folder (``is_entry``)."""
     folder = cache_dir()
     if not folder.is_dir():
         return []
-    return sorted(p for p in folder.iterdir() if p.suffix in (".npz", ".json") and p.name.count("-") >= 1)
+    return sorted(p for p in folder.iterdir() if is_entry(p))
+
+
+def _foreign(folder: Path, own: list) -> int:
+    """How many files of the folder are not the cache's (entries, temporary files, secret, numba's folder)."""
+    if not folder.is_dir():
+        return 0
+    names = {p.name for p in own} | {SECRET_NAME, "numba"}
+    return sum(1 for p in folder.iterdir() if p.name not in names and not TEMP_NAME.fullmatch(p.name))
 
 
 def info() -> dict:
-    """Folder, number of entries and bytes, by kind."""
+    """Folder, number of entries and bytes, by kind, and how many other files the folder holds."""
     kinds: dict = {}
-    for p in entries():
+    own = entries()
+    for p in own:
         kind = p.name.split("-", 1)[0]
         k = kinds.setdefault(kind, {"entries": 0, "bytes": 0})
         k["entries"] += 1
         k["bytes"] += p.lstat().st_size
     return {"folder": str(cache_dir()), "entries": sum(k["entries"] for k in kinds.values()),
-            "bytes": sum(k["bytes"] for k in kinds.values()), "kinds": kinds}
+            "bytes": sum(k["bytes"] for k in kinds.values()), "kinds": kinds,
+            "other_files": _foreign(cache_dir(), own)}
+
+
+def _own_secret(path: Path) -> bool:
+    try:
+        _read_secret(path)
+        return True
+    except (ValueError, InputError, OSError):
+        return False
 
 
 def clear() -> dict:
-    """Delete every entry (and leftover temporary files, and the secret); return what was removed."""
+    """Delete every entry (and the cache's leftover temporary files, and its secret); return what was
+    removed and how many other files were kept."""
     removed, size = 0, 0
     folder = cache_dir()
-    leftovers = list(folder.glob(".*.tmp")) if folder.is_dir() else []
-    if os.path.lexists(folder / SECRET_NAME):  # not counted: no entry is left for it to check
+    own = entries()
+    leftovers = [p for p in folder.iterdir() if TEMP_NAME.fullmatch(p.name)] if folder.is_dir() else []
+    secret = folder / SECRET_NAME
+    if os.path.lexists(secret) and _own_secret(secret):  # not counted: no entry is left for it to check
         try:
-            (folder / SECRET_NAME).unlink()
+            secret.unlink()
         except OSError as exc:
-            raise InputError(f"{folder / SECRET_NAME}: cannot remove ({exc.strerror or exc})") from None
-    for p in entries() + leftovers:
+            raise InputError(f"{secret}: cannot remove ({exc.strerror or exc})") from None
+    for p in own + leftovers:
         try:
             n = p.lstat().st_size
             p.unlink()
@@ -306,4 +361,5 @@ def clear() -> dict:
         except OSError as exc:
             raise InputError(f"{p}: cannot remove ({exc.strerror or exc})") from None
         removed, size = removed + 1, size + n
-    return {"folder": str(folder), "removed": removed, "bytes": size}
+    kept = _foreign(folder, []) + os.path.lexists(secret)  # a file at the secret's name that is not one
+    return {"folder": str(folder), "removed": removed, "bytes": size, "kept": kept}

@@ -34,6 +34,12 @@ descriptor 1 elsewhere for a block, so that what a compiled library prints on
 its own stdout (HiGHS prints a banner when an instance is created, before any
 option can be set) cannot end up in front of the JSON of ``--json``.
 
+Before any work, :func:`check_distinct` refuses an output that is one of the
+command's inputs or another of its outputs (the same file by device and inode,
+through links; a path that does not exist yet by its resolved location).
+Streams (``/dev/null``, ``/dev/stdout``, a FIFO) are never replaced, so they
+may take several outputs.
+
 Examples
 --------
 >>> import tempfile, pathlib
@@ -224,6 +230,8 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
     """
     if mode not in ("wb", "w"):
         raise ValueError("mode must be 'wb' or 'w'")
+    if not isinstance(path, (str, os.PathLike)) or not isinstance(os.fspath(path), str) or not os.fspath(path):
+        raise InputError(f"an output must be a file name (str or path), got {path!r:.40}")
     path = Path(os.fspath(path))
     kind = _stream_kind(path)
     if kind == "folder":
@@ -269,6 +277,46 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
             handle.close()
         with contextlib.suppress(OSError):
             os.close(fd)
+
+
+def _identity(path):
+    """What ``path`` is as a file: ("file", device, inode) through links, ("new", resolved path) when it does
+    not exist, None for a stream or folder (never replaced by a write)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return ("new", os.path.realpath(os.path.abspath(path)))
+    return ("file", st.st_dev, st.st_ino) if stat.S_ISREG(st.st_mode) else None
+
+
+def check_distinct(outputs, inputs=()) -> None:
+    """Refuse, in one line, an output that is an input or another output (module docstring).
+
+    Parameters
+    ----------
+    outputs : (label, path) pairs, e.g. ``("--html", "page.html")``.
+    inputs : (label, path) pairs of the files read; names that are not files are ignored.
+
+    Raises
+    ------
+    InputError
+        naming the output and the input or output it is.
+    """
+    seen = {}
+    for label, path in inputs:
+        ident = _identity(path)
+        if ident is not None and ident[0] == "file":
+            seen.setdefault(ident, f"the input {label} ({path})")
+    for label, path in outputs:
+        ident = _identity(path)
+        if ident is None:
+            continue
+        if ident in seen:
+            what = seen[ident]
+            hint = "an output may not overwrite an input" if what.startswith("the input") else \
+                "give each output its own file"
+            raise InputError(f"{label} {path}: it is {what}; {hint}")
+        seen[ident] = f"the output {label} ({path})"
 
 
 def write_bytes(path, data: bytes, make_parents: bool = True) -> Path:

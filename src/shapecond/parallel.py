@@ -205,6 +205,7 @@ def _thread_env(n_jobs: int) -> dict:
 
 def _in_worker(parent_pid, f, args, kwargs):
     """Run one task in a pool worker that ends with the command, even on SIGKILL."""
+    from .shapes.helper import die_with_parent
 
     die_with_parent(parent_pid)
     return f(*args, **kwargs)
@@ -336,26 +337,6 @@ def _vm_hwm_mib() -> float:
     except OSError:
         pass
     return math.nan
-
-
-def die_with_parent(parent_pid: int) -> None:
-    """Make this worker process end when its parent does (Linux ``PR_SET_PDEATHSIG``).
-
-    Called at the start of every task run by a pool of worker processes, so that
-    killing the command (even with SIGKILL) does not leave its workers running.
-    A no-op where ``prctl`` is not available.
-    """
-    import ctypes
-    import os
-    import signal
-
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)  # 1 = PR_SET_PDEATHSIG
-    except (OSError, AttributeError):  # pragma: no cover - not Linux
-        return
-    if os.getppid() != parent_pid:  # the parent died before the signal was armed
-        os._exit(1)
 
 
 def cap_jobs(n_jobs: int, n_tasks: int) -> int:

@@ -1,9 +1,13 @@
 """``shapecond batch``: inputs, the row of one shape, the output table, resuming, errors."""
 
+import fcntl
 import json
 import math
 import os
 import re
+import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -233,3 +237,71 @@ def test_delta_at_a_given_level_or_at_the_collections_own_level(tmp_path, capsys
     assert all(json.loads(r["params"])["epsilon"] == pytest.approx(s["epsilon"]) for r in rows)
     code, out, err = run_cli(capsys, "batch", shapes[0], "-o", tmp_path / "one.csv", *base, "--epsilon-from-collection")
     assert code == 2 and "at least two readable shapes" in err and not (tmp_path / "one.csv").exists()
+
+
+def _dead_pid() -> int:
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_a_lock_whose_named_batch_is_dead_is_taken_over(tmp_path, suffix):
+    """A process left by a killed batch (e.g. a helper it forked) held its lock: every --resume was refused,
+    naming the dead batch."""
+    path = tmp_path / f"t{suffix}"
+    lock = tmp_path / f".t{suffix}.lock"
+    lock.write_text(f"host {socket.gethostname()}, pid {_dead_pid()}\n")
+    fd = os.open(lock, os.O_RDWR)
+    fcntl.flock(fd, fcntl.LOCK_EX)  # the left process's hold on the dead batch's lock
+    try:
+        with pytest.warns(UserWarning, match="took over the lock of a batch that is no longer running"):
+            with Table(path, "resume") as table:
+                table.append(table_row(1))
+                assert f"pid {os.getpid()}" in lock.read_text()
+        assert len(read_table(path)) == 1
+        lock.write_text(f"host {socket.gethostname()}, pid {os.getpid()}\n")  # a live holder: refused
+        fd2 = os.open(lock, os.O_RDWR)
+        fcntl.flock(fd2, fcntl.LOCK_EX)
+        try:
+            with pytest.raises(InputError, match="being written by another batch"):
+                with Table(path, "resume"):
+                    pass
+        finally:
+            os.close(fd2)
+    finally:
+        os.close(fd)
+
+
+@pytest.mark.slow
+def test_the_collections_level_comes_from_its_first_readable_shapes(tmp_path, capsys):
+    """batch bad.off a.off b.off --epsilon-from-collection stopped the whole batch on bad.off."""
+    (tmp_path / "bad.off").write_text("this is not a mesh\n")
+    shapes = [tmp_path / "bad.off", "demo:animal", "demo:animal:delta=0.1"]
+    code, out, err = run_cli(capsys, "batch", *shapes, "-o", tmp_path / "t.csv", "--points", 30, "--effort",
+                             "quick", "--no-cache", "--json", "--epsilon-from-collection")
+    assert code == 3, err  # the bad shape's error row; the others scored at the level of the two readable ones
+    s = json.loads(out)
+    assert s["epsilon_source"].startswith("the collection's level, read off 1 matched map(s)")
+    assert "bad.off: not used for the collection's level" in err
+    rows = read_table(tmp_path / "t.csv")
+    assert [bool(r["error"]) for r in rows] == [True, False, False]
+    assert all(r["delta_epsilon"] == pytest.approx(s["epsilon"]) for r in rows[1:])
+
+
+def test_links_loops_and_fifos_in_a_folder_are_never_dropped_without_a_word(tmp_path):
+    """A link to a folder (a loop among them) was skipped without a word; a FIFO or a file link loop is listed
+    and becomes an error row that says what it is."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "a.off").write_text("OFF\n")
+    (tmp_path / "sub" / "b.off").write_text("OFF\n")
+    os.symlink(".", tmp_path / "sub" / "self")
+    os.symlink(tmp_path / "sub", tmp_path / "linkdir")
+    os.mkfifo(tmp_path / "fifo.off")
+    os.symlink("loop.off", tmp_path / "loop.off")
+    with pytest.warns(UserWarning) as caught:
+        found = expand_inputs([tmp_path])
+    assert [os.path.relpath(p, tmp_path) for p in found] == ["a.off", "fifo.off", "loop.off", "sub/b.off"]
+    said = sorted(str(w.message).split(":")[0] for w in caught)
+    assert said == [str(tmp_path / "linkdir"), str(tmp_path / "sub" / "self")]
+    assert all("a link to a folder, not followed" in str(w.message) for w in caught)

@@ -167,6 +167,69 @@ def test_a_batch_killed_mid_run_resumes_to_the_same_table(tmp_path):
     assert not journal.exists()
 
 
+def _descendants(pid: int) -> set[int]:
+    """Processes below ``pid`` (Linux /proc)."""
+    parents = {}
+    for name in os.listdir("/proc"):
+        if name.isdigit():
+            try:
+                with open(f"/proc/{name}/stat", "rb") as fh:
+                    parents[int(name)] = int(fh.read().rsplit(b")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+    found, todo = set(), [pid]
+    while todo:
+        parent = todo.pop()
+        kids = [p for p, q in parents.items() if q == parent]
+        found.update(kids)
+        todo += kids
+    return found
+
+
+def _running(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            return fh.read().rsplit(b")", 1)[1].split()[0] not in (b"Z", b"X")  # a zombie has ended
+    except OSError:
+        return False
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.path.isdir("/proc/self") or len(os.sched_getaffinity(0)) < 2,
+                    reason="reads /proc; the geodesic helper needs two CPUs")
+def test_a_batch_killed_while_its_helper_works_leaves_no_process_and_resumes(tmp_path):
+    """A kill -9 left the forked geodesic helper running for good, holding the output's lock: --resume
+    answered "being written by another batch" (the dead one) for ever."""
+    from shapecond.shapes.synthetic import bumpy_blob
+
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for k in range(4):
+        g = bumpy_blob(subdivisions=3, seed=30 + k)
+        write_mesh(folder / f"b{k}.off", g.vertices, g.faces)
+    out = tmp_path / "t.csv"
+    env = {k: v for k, v in os.environ.items() if k != "SHAPECOND_WORKERS"}
+    cmd = [sys.executable, "-m", "shapecond", "batch", str(folder), "--points", "60", "--no-cache", "--out", str(out)]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline, kids = time.monotonic() + 60, set()
+    while proc.poll() is None and not kids and time.monotonic() < deadline:
+        kids = _descendants(proc.pid)
+        time.sleep(0.01)
+    assert kids, "the batch ended (or did not fork its helper) before it could be killed"
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    deadline = time.monotonic() + 5
+    while any(map(_running, kids)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    left = [p for p in kids if _running(p)]
+    for p in left:
+        os.kill(p, signal.SIGKILL)
+    assert not left, "processes of the killed batch are still running"
+    resumed = subprocess.run(cmd + ["--resume"], env=env, capture_output=True, text=True, timeout=120)
+    assert resumed.returncode == 0, resumed.stderr
+    assert len(read_table(out)) == 4
+
+
 def test_jobs_and_scheduler_parse():
     assert parallel.parse_scheduler("local:3") == ("local", 3)
     assert parallel.parse_scheduler("tcp://10.0.0.1:8786") == ("address", "tcp://10.0.0.1:8786")

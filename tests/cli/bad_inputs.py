@@ -173,6 +173,20 @@ def make_files(folder) -> dict:
     np.savez(d / "npz_without_D.npz", X=np.zeros(3))
     out["npz_without_D.npz"] = d / "npz_without_D.npz"
     out.update(_special_files(d))
+    (d / "good.off").write_text(_off(*_sphere()))  # a valid mesh and an id file, to be named as outputs too
+    (d / "good_ids").write_text("1\n")
+    np.save(d / "matrix_good.npy", np.abs(np.subtract.outer(np.arange(8.0), np.arange(8.0))))
+    out["matrix_good.npy"] = d / "matrix_good.npy"
+    n_good = len(_sphere()[0])  # ground-truth maps of the 162-vertex good.off onto itself
+    for name, ids in (("truth_negative", [0, -5]), ("truth_range", list(range(n_good - 1)) + [n_good + 5]),
+                      ("truth_words", ["left", "paw"])):
+        (d / name).write_text("\n".join(map(str, ids)) + "\n")
+        out[name] = d / name
+    out.update({"good.off": d / "good.off", "good_ids": d / "good_ids"})
+    for name, make in (("good_link.off", os.symlink), ("good_hardlink.off", os.link)):
+        if not os.path.lexists(d / name):
+            make(d / "good.off", d / name)
+        out[name] = d / name
     (d / "a_folder.off").mkdir(exist_ok=True)
     out["a_folder.off"] = d / "a_folder.off"
     out["missing.off"] = d / "missing.off"
@@ -202,7 +216,9 @@ BAD_VTS = {"vts_short": ("1\n2\n3\n4\n", "1\n2\n3\n"),       # unequal reference
            "vts_zero_based": ("1\n2\n3\n4\n", "0\n1\n2\n3\n"),   # a 0: 0-based by mistake
            "vts_two_per_line": ("1\n2\n3\n4\n", "1 2\n3\n4\n1\n"),
            "vts_fraction": ("1\n2\n3\n4\n", "1\n2.5\n3\n4\n"),
-           "vts_missing": ("1\n2\n3\n4\n", None)}              # shape1 has no .vts
+           "vts_missing": ("1\n2\n3\n4\n", None),             # shape1 has no .vts
+           "vts_huge": ("1\n2\n3\n4\n", "1\n2\n3\n99999999999999999999999\n"),  # beyond int64
+           "vts_superscript": ("1\n2\n3\n4\n", "1\n2\n3\n\u00b2\n")}  # '²'.isdigit() is True
 
 
 def _remeshed_datasets(d, good) -> dict:
@@ -214,7 +230,7 @@ def _remeshed_datasets(d, good) -> dict:
         for name, vts in (("shape0", first), ("shape1", second)):
             (cls / "shapes" / f"{name}.off").write_text(good)
             if vts is not None:
-                (cls / "corres" / f"{name}.vts").write_text(vts)
+                (cls / "corres" / f"{name}.vts").write_text(vts, encoding="utf-8")
         out[f"dataset_{kind}"] = d / f"dataset_{kind}"
     plain = d / "dataset_no_corres" / "cls"  # a class with one vertex order asked for the remeshed protocol
     plain.mkdir(parents=True, exist_ok=True)
@@ -370,6 +386,37 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
         ["batch", *small, "--out", f["planted_lock/.t.csv.lock"].parent / "t.csv"])
     add("batch output with a planted journal link",
         ["batch", *small, "--out", f["planted_journal/.t.parquet.journal"].parent / "t.parquet"])
+    # an output that is an input or another output (same file through links), or has no name
+    g = str(f["good.off"])
+    pair = ["match", GOOD, GOOD, "--landmarks-source", "0", "--landmarks-target", "0", "--points", "8", "--no-cache"]
+    add("output is the input: score --html", ["score", g, *SMALL, "--html", g])
+    add("output is the input through a link: score --witness-png", ["score", g, *SMALL, "--witness-png",
+                                                                     f["good_link.off"]])
+    add("output is the input through a hard link: landmarks --ply", ["landmarks", g, "-k", "2", "--method", "fps",
+                                                                      *SMALL, "--ply", f["good_hardlink.off"]])
+    add("output is the landmark file: heatmap --png", ["heatmap", GOOD, "--landmarks", f["good_ids"], *SMALL,
+                                                       "--png", f["good_ids"]])
+    add("output is the source: match -o", [*pair[:1], g, *pair[2:], "-o", g])
+    add("output is another output: match -o --html", [*pair, "-o", "OUT.txt", "--html", "OUT.txt"])
+    add("output is another output: score --html --witness-png", ["score", GOOD, *SMALL, "--html", "OUT.html",
+                                                                 "--witness-png", "OUT.html"])
+    add("output is another output: local --html --heatmap-png", ["local", GOOD, "--html", "OUT.x",
+                                                                 "--heatmap-png", "OUT.x"])
+    # --truth and drawings, refused before the matching (-o was written first)
+    gg = ["match", g, g, "--landmarks-source", "0", "--landmarks-target", "0", "--points", "8", "--no-cache",
+          "-o", "OUT.txt", "--html", "OUT.html", "--truth"]
+    for name in ("ids_fifo", "dev_zero.off", "truth_negative", "truth_range", "truth_words", "missing.off"):
+        add(f"match --truth {name}", gg + [f[name]])
+    vts = f["dataset_vts_short"] / "cls" / "corres"
+    add("match --truth of two .vts files of unequal counts", gg + [f"{vts / 'shape0.vts'},{vts / 'shape1.vts'}"])
+    add("match --truth of two files that are not .vts", gg + [f"{g},{g}"])
+    m = str(f["matrix_good.npy"])
+    for option in ("--doubt-ply", "--html", "--doubt-png"):
+        add(f"match of distance matrices {option}", ["match", m, m, "--landmarks-source", "0", "--landmarks-target",
+                                                     "0", "-o", "OUT.txt", option, "OUT.x"])
+    for argv in (["score", GOOD, *SMALL, "--html", ""], [*pair, "-o", "OUT.txt", "--doubt-ply", ""],
+                 [*pair, "-o", ""], ["heatmap", GOOD, *SMALL, "--png", ""], ["batch", GOOD, *SMALL, "--out", ""]):
+        add(f"output with an empty name: {argv[0]} {argv[-2]} ''", argv)
     add("output is a folder", ["sample", GOOD, "--points", "4", "--no-cache", "-o", str(f["a_folder.off"])])
     add("sample output not .npz", ["sample", GOOD, "--points", "4", "--no-cache", "-o", "OUT.txt"])
     for name in ("off_truncated_faces.off", "off_nan.off", "fifo.off"):  # the shape the level is read against
@@ -383,6 +430,24 @@ def time_limit(cls: str) -> float:
     """Seconds a case may take: 10 for those that used to hang (FIFOs, devices, batch outputs),
     otherwise enough for a slow machine's first compilation of the numba kernels."""
     return 10.0 if any(w in cls for w in ("fifo", "dev_zero", "batch output")) else 300.0
+
+
+_RESULTS: dict = {}
+
+
+def _result(kind: str):
+    """A small result of each public function (made once, when a case first needs it)."""
+    import shapecond as sc
+
+    if kind not in _RESULTS:
+        _RESULTS[kind] = {
+            "score": lambda: sc.score(GOOD, 8, cache=False),
+            "heatmap": lambda: sc.heatmap(GOOD, n_points=8, cache=False),
+            "landmarks": lambda: sc.landmarks(GOOD, 2, "fps", 8, cache=False),
+            "match": lambda: sc.match(GOOD, GOOD, [0, 5, 9], [0, 5, 9], n_points=8, cache=False, error_bar=True),
+            "local_score": lambda: sc.local_score(GOOD, [0, 5, 9]),
+        }[kind]()
+    return _RESULTS[kind]
 
 
 def api_cases(folder) -> list[tuple[str, object]]:
@@ -436,6 +501,14 @@ def api_cases(folder) -> list[tuple[str, object]]:
         ("evaluate n_jobs 0", lambda: sc.evaluate(f["dataset_garbage"], cache=False, n_jobs=0)),
         *[(f"evaluate remeshed {kind}", lambda kind=kind: sc.evaluate(f[f"dataset_{kind}"], cache=False))
           for kind in BAD_VTS],
+        *[(f"{kind} result .{call}", lambda kind=kind, call=call: eval(f"r.{call}", {"r": _result(kind),
+                                                                                  "p": Path(folder) / "out" / "x"}))
+          for kind in ("score", "heatmap", "landmarks", "match", "local_score")
+          for call in ("to_html(123)", "to_html(p, bogus=1)", "plot(fig='x')", "plot(path=123)", "to_html('')")],
+        *[(f"heatmap epsilon {e!r}", lambda e=e: sc.heatmap(GOOD, n_points=8, epsilon=e, cache=False))
+          for e in ("abc", float("inf"), float("nan"), -1.0)],
+        *[(f"landmarks {m} epsilon {e!r}", lambda m=m, e=e: sc.landmarks(GOOD, 2, m, 8, epsilon=e, cache=False))
+          for m in ("fps", "cnbs-scale") for e in ("abc", float("inf"), float("nan"))],
         ("match zoomout with 2 landmarks", lambda: sc.match(GOOD, GOOD, [0, 1], [0, 1], matcher="zoomout",
                                                            cache=False)),
         ("match zoomout on matrices", lambda: sc.match(np.ones((4, 4)) - np.eye(4), np.ones((4, 4)) - np.eye(4),

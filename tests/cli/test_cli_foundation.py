@@ -63,3 +63,23 @@ def test_demo_json(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["demo.html", "heatmap.png", "landmarks.png", "witness.png"]
     assert summary["pictures"]["html"] == str(tmp_path / "demo.html")
     assert (tmp_path / "demo.html").read_text().count('class="sc-data"') == 3  # witness, heat map, landmarks
+
+
+def test_every_command_checks_its_outputs_against_its_inputs():
+    """The one rule for outputs (cli.common.Command, output.check_distinct) holds for every command."""
+    import click
+
+    from shapecond.cli import cli
+    from shapecond.cli.common import Command, OutputFile
+
+    ctx = click.Context(cli)
+    for name in cli.list_commands(ctx):
+        command = cli.get_command(ctx, name)
+        if isinstance(command, click.Group):
+            assert not any(isinstance(p.type, OutputFile) for c in command.commands.values() for p in c.params)
+            continue
+        assert isinstance(command, Command), name
+        for p in command.params:  # every file option that writes is an OutputFile
+            if isinstance(p.type, click.Path) and p.type.dir_okay is False and p.name not in (
+                    "symmetry_map", "epsilon_from"):
+                assert isinstance(p.type, OutputFile), (name, p.name)

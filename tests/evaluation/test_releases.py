@@ -69,7 +69,7 @@ def test_a_pairs_list_groups_the_pairs_by_source_across_classes(tmp_path):
 
 @pytest.mark.slow
 def test_the_listed_pairs_are_evaluated_with_flips_and_the_pooled_table(tmp_path):
-    root = _flat(tmp_path / "vtx_5k")
+    _flat(tmp_path / "vtx_5k")
     ev = evaluate_dataset(tmp_path, methods=("fps",), matchers=("zoomout",), n_points=60, cache=False,
                           pairs=(("strip0", "plate2"), ("plate1", "strip9")), n_landmarks=4, counts=(3,),
                           error_bars=False)
@@ -107,3 +107,34 @@ def test_bad_releases_and_pairs_are_refused_in_one_line(tmp_path):
         find_classes(empty)
     with pytest.raises(InputError, match="either classes or a pairs list"):
         evaluate_dataset(tmp_path, classes=("strip",), pairs=(("strip0", "strip4"),))
+
+
+def test_two_shapes_of_one_name_and_unreadable_entries_are_refused_not_dropped(tmp_path):
+    import os
+
+    root = _flat(tmp_path / "vtx_5k", names=("strip0", "strip4"))
+    shutil.copy(root / "strip4.off", root / "strip4.ply")
+    with pytest.raises(InputError, match="two shapes named 'strip4'"):
+        find_classes(root)
+    (root / "strip4.ply").unlink()
+    os.mkfifo(root / "strip9.off")
+    with pytest.raises(InputError, match="strip9.off: not a regular file"):
+        find_classes(root)
+    (root / "strip9.off").unlink()
+    (root / "loop.off").symlink_to(root / "loop.off")
+    with pytest.raises(InputError, match="loop.off"):
+        find_classes(root)
+
+
+def test_the_cli_refuses_a_bad_pairs_file_or_release_in_one_line_and_writes_nothing(tmp_path, capsys):
+    from tests.helpers import run_cli
+
+    root = _flat(tmp_path / "vtx_5k", names=("strip0", "strip4"))
+    out = tmp_path / "report"
+    (tmp_path / "pairs.txt").write_text("strip0 strip9\n")
+    for args, match in (((root, "--pairs", tmp_path / "pairs.txt"), "strip9"),
+                        ((root, "--pairs", tmp_path / "none.txt"), "none.txt"),
+                        ((root, "--pairs", tmp_path / "pairs.txt", "--classes", "strip"), "not both")):
+        code, stdout, err = run_cli(capsys, "evaluate", *args, "--out", out, "--methods", "fps", "-n", 20)
+        assert code == 2 and match in err and err.count("\n") == 1 and stdout == "", err
+        assert not out.exists()

@@ -169,3 +169,24 @@ def test_atomic_write_leaves_nothing_on_failure(tmp_path):
             fh.write("half")
             raise RuntimeError("boom")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("suffix", [".off", ".obj", ".ply"])
+def test_a_tiny_mesh_written_and_read_back_keeps_its_size(tmp_path, suffix):
+    """write_mesh wrote a mesh scaled by 1e-25 with 10 decimals: every vertex at 0, refused as one point."""
+    import shapecond as sc
+    from shapecond.shapes.synthetic import sphere
+
+    g = sphere(subdivisions=2)
+    write_mesh(tmp_path / f"tiny{suffix}", g.vertices * 1e-25, g.faces)
+    back = sc.load(tmp_path / f"tiny{suffix}")
+    np.testing.assert_allclose(back.vertices, g.vertices * 1e-25, rtol=1e-7, atol=0)
+
+
+def test_a_file_with_every_vertex_at_one_point_says_what_happened(tmp_path):
+    import shapecond as sc
+
+    (tmp_path / "zero.off").write_text("OFF\n4 2 0\n" + "0.0000000000 0.0000000000 -0.0000000000\n" * 4
+                                        + "3 0 1 2\n3 0 2 3\n")
+    with pytest.raises(InputError, match="same coordinates.*too few decimals"):
+        sc.load(tmp_path / "zero.off")

@@ -9,7 +9,7 @@ from shapecond.shapes.vts import read_vts
 
 def _write(tmp_path, text, name="a.vts"):
     p = tmp_path / name
-    p.write_bytes(text) if isinstance(text, bytes) else p.write_text(text)
+    p.write_bytes(text) if isinstance(text, bytes) else p.write_text(text, encoding="utf-8")
     return p
 
 
@@ -28,6 +28,8 @@ def test_ids_are_made_zero_based_and_may_repeat(tmp_path):
     ("", "empty"),
     ("\n\n", "no reference points"),
     (b"\x00\x01\x02", "binary"),
+    ("1\n99999999999999999999999\n", "out of range"),  # was an OverflowError (exit 1)
+    ("1\n\u00b2\n", "one positive integer"),           # '²' passed isdigit(): a ValueError (exit 1)
 ])
 def test_bad_files_are_one_input_error(tmp_path, text, message):
     with pytest.raises(InputError, match=message):

@@ -29,7 +29,7 @@ from ..checks import parse_ids
 from ..errors import InputError
 from ..jsonable import jsonable
 from ..matching.error_bar import bar_surface, map_distortion
-from .inputs import DEFAULT_POINTS
+from .inputs import DEFAULT_POINTS, load
 from .matching import _bar_inputs, _inputs, _match_options, _match_pair
 
 
@@ -115,16 +115,31 @@ def deformation_level(x, others, *, landmarks=(), landmarks_others=None, matcher
 
 
 def collection_level(shapes: list, **options) -> DeformationLevel:
-    """The level of a collection: its first shape against the next ``COLLECTION_PAIRS`` (``deformation_level``,
-    in diameters of the first shape; ``**options`` as there).
+    """The level of a collection: its first readable shape against the next ``COLLECTION_PAIRS`` readable
+    ones (``deformation_level``, in diameters of the first; ``**options`` as there).
 
     A class level needs a few pairs, not all of them: each pair reads the same kind of pose change
     from below, and the median of a few discards a pair whose map went wrong (which reads the level
-    higher).
+    higher).  A shape that cannot be read (or is a distance matrix) is passed over with a warning.
     """
-    if len(shapes) < 2:
+    import warnings
+
+    readable = []
+    for x in shapes:
+        if len(readable) > COLLECTION_PAIRS:
+            break
+        try:
+            shape = load(x, largest_component=options.get("largest_component", False),
+                         force=options.get("force", False))
+            if isinstance(shape, np.ndarray):
+                raise InputError("a distance matrix, not a mesh or point cloud")
+        except InputError as exc:
+            warnings.warn(f"{x}: not used for the collection's level ({str(exc).splitlines()[0]})")
+            continue
+        readable.append(shape)
+    if len(readable) < 2:
         raise InputError("the level of a collection needs at least two readable shapes")
-    return deformation_level(shapes[0], list(shapes[1:1 + COLLECTION_PAIRS]), **options)
+    return deformation_level(readable[0], readable[1:], **options)
 
 
 def _pair_level(x, y, ids_s, ids_t, opts, flags) -> tuple[float, float]:

@@ -98,10 +98,11 @@ class SymmetryProblem:
                            lo=0.0, hi=1.0)
         n = self.shape.n_samples
         score = check_choice(score, "score", ("sigma", "scale"))
+        epsilon = None if epsilon is None else check_float(epsilon, "epsilon", lo=0.0)  # checked for either score
         guard_heat_map(self.shape, self.force)
         budget, base, unit, eps = None, None, 1.0, None
         if score == "scale":
-            eps = default_epsilon(self.shape.D, n) if epsilon is None else check_float(epsilon, "epsilon", lo=0.0)
+            eps = default_epsilon(self.shape.D, n) if epsilon is None else epsilon
             budget, unit = budget_of(eps, n, self.shape.D), 1.0 / math.sqrt(n)
         else:
             base = self.search(ids)

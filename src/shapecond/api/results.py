@@ -251,8 +251,11 @@ class MatchResult(Pictures):
 
     def to_html(self, path, truth=None, **kw) -> str:
         """Write the map as a self-contained HTML page (colour transfer, linked landmarks, the error bar's
-        doubt field and, with ``truth`` (target id per source id, or "same-ids"), the error field);
-        returns the path."""
+        doubt field and, with ``truth``, the error field); returns the path.
+
+        ``truth``: one target id per source id (-1: none), "same-ids", the path of such a map file, or
+        ``"SOURCE.vts,TARGET.vts"``, the two shapes' reference files of a remeshed release (the error is
+        then measured at the source's reference vertices); see ``viz.pages.truth_map``."""
         return super().to_html(path, truth=truth, **kw)
 
     def plot(self, fig=None, path=None, **kw):

@@ -19,9 +19,16 @@ FOLDER_SUFFIXES = frozenset(MESH_SUFFIXES | {".vert", ".xyz", ".npy"})
 
 
 def _walk(folder: Path) -> list[str]:
+    """Shape files below ``folder``; links to folders are not followed (a loop could not end), with a warning."""
+    import warnings
+
     found = []
     for root, dirs, files in os.walk(folder):
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
+        links = sorted(d for d in dirs if not d.startswith(".") and os.path.islink(os.path.join(root, d)))
+        for d in links:
+            warnings.warn(f"{os.path.join(root, d)}: a link to a folder, not followed (name the folder itself "
+                          "to score its shapes)")
+        dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in links)
         found += [os.path.join(root, f) for f in sorted(files)
                   if not f.startswith(".") and Path(f).suffix.lower() in FOLDER_SUFFIXES]
     return found

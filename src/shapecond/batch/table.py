@@ -30,8 +30,11 @@ FIFO cannot block the batch.  A full disk or a read-only folder is one
 **One writer.** The table is locked through ``.NAME.lock`` with ``flock``,
 which the kernel releases when the process dies, so a killed batch leaves no
 stale lock; a second batch on the same output refuses, naming the holder's
-host and pid.  The lock file is only rewritten when it holds nothing but such
-a line.  (Written here rather than with the ``filelock`` package: its
+host and pid.  A lock held while the process it names (on this host) is dead
+is held by a process that inherited it (a child the kernel did not end): its
+file is unlinked, with a warning, and the lock taken afresh, under an ``flock``
+of the folder so that two batches cannot both take it over.  The lock file is
+only rewritten when it holds nothing but such a line.  (Written here rather than with the ``filelock`` package: its
 ``flock`` lock leaves the lock file behind and its soft lock goes stale when
 the holder is killed.)  On a network file system the lock is only as good as
 the server's ``flock`` support.
@@ -103,7 +106,12 @@ class OutputLock:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
                 holder = os.read(fd, 200).decode(errors="replace").strip() or "unknown"
+                taken_over = _dead_holder(holder) is not None and self._take_over(fd)
                 os.close(fd)
+                if taken_over:
+                    warnings.warn(f"{self.path.name[1:-5]}: took over the lock of a batch that is no longer "
+                                  f"running ({holder}); a process it left held the lock")
+                    continue
                 raise InputError(f"{self.path.name[1:-5]} is being written by another batch ({holder}); "
                                  "wait for it to finish or choose another --out") from None
             if self._names(fd):  # the previous holder may have removed the file between our open and flock
@@ -116,6 +124,25 @@ class OutputLock:
             raise
         self.fd = fd
         return self
+
+    def _take_over(self, fd) -> bool:
+        """Unlink the lock file open as ``fd`` if its name still refers to it (under the folder's flock)."""
+        import fcntl
+
+        try:
+            folder = os.open(self.path.parent, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+        except OSError:
+            return False
+        try:
+            fcntl.flock(folder, fcntl.LOCK_EX)
+            if not self._names(fd) or os.fstat(fd).st_nlink != 1:
+                return False
+            self.path.unlink()
+            return True
+        except OSError:
+            return False
+        finally:
+            os.close(folder)  # releases the folder's flock
 
     def _names(self, fd) -> bool:
         """Whether the lock's name still refers to the file open as ``fd``."""
@@ -144,6 +171,25 @@ class OutputLock:
             os.close(self.fd)
             self.fd = None
         return False
+
+
+def _dead_holder(line: str) -> int | None:
+    """The pid named by a lock line of this host whose process has ended; None otherwise."""
+    m = re.fullmatch(r"host (.*), pid (\d+)", line.strip())
+    if m is None or m.group(1) != socket.gethostname():
+        return None
+    pid = int(m.group(2))
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return pid
+    except (OSError, OverflowError):  # alive but not ours (EPERM), or not a pid at all
+        return None
+    try:  # a zombie (ended, not yet reaped by its parent) has ended too
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            return pid if fh.read().rsplit(b")", 1)[1].split()[0] in (b"Z", b"X") else None
+    except (OSError, IndexError):
+        return None
 
 
 # --- append-only line files -------------------------------------------------------------

@@ -10,15 +10,16 @@ import click
 from ..batch import format_summary, run_batch
 from ..errors import InputError
 from ..matching.pipeline import MATCHERS
-from .common import Float, emit_json, json_option, pop_shape_options, progress_enabled, shape_options
+from .common import (Command, Float, OutputFile, emit_json, json_option, pop_shape_options, progress_enabled,
+                     shape_options)
 
 #: Exit status when some shapes failed (their rows hold the error).
 EXIT_SOME_FAILED = 3
 
 
-@click.command("batch")
+@click.command("batch", cls=Command)
 @click.argument("inputs", nargs=-1, required=True, metavar="INPUT...")
-@click.option("--out", "-o", "out", required=True, type=click.Path(dir_okay=False),
+@click.option("--out", "-o", "out", required=True, type=OutputFile(),
               help="Output table: .parquet (needs pyarrow), .csv or .jsonl; a regular file (not a link) "
                    "that is missing, empty or a batch table.")
 @shape_options

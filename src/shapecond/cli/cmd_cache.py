@@ -24,6 +24,8 @@ def info(as_json):
         return
     click.echo(f"folder   {report['folder']}")
     click.echo(f"entries  {report['entries']} ({human_bytes(report['bytes'])})")
+    if report["other_files"]:
+        click.echo(f"other    {report['other_files']} files that are not cache entries (never removed)")
     for kind, k in sorted(report["kinds"].items()):
         click.echo(f"  {kind:10s} {k['entries']:6d}  {human_bytes(k['bytes'])}")
 
@@ -31,9 +33,16 @@ def info(as_json):
 @command.command("clear")
 @json_option
 def clear(as_json):
-    """Delete every cache entry (results are recomputed when next needed)."""
+    """Delete every cache entry (results are recomputed when next needed).
+
+    Only the cache's own files are removed: entries recognised by their name and
+    content (their key and checksum), the cache's temporary files and its secret;
+    any other file in the folder is kept.
+    """
     report = disk.clear()
     if as_json:
         emit_json(report)
         return
     click.echo(f"removed {report['removed']} entries ({human_bytes(report['bytes'])}) from {report['folder']}")
+    if report["kept"]:
+        click.echo(f"kept {report['kept']} files that are not cache entries", err=True)

@@ -23,7 +23,7 @@ import numpy as np
 from ..api import landmarks, load, metric_shape, score
 from ..errors import InputError
 from ..jsonable import fmt
-from .common import SEED, Float, Int, emit_json, force_option, info, json_option, progress_enabled
+from .common import SEED, Command, Float, Int, emit_json, force_option, info, json_option, progress_enabled
 
 
 def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
@@ -48,7 +48,7 @@ def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
     return {k: str(v) for k, v in paths.items()}
 
 
-@click.command("demo")
+@click.command("demo", cls=Command)
 @click.option("--points", "-n", type=Int(3, 5000), default=400, show_default=True, help="Number of samples N.")
 @click.option("--landmark-points", type=Int(3, 5000), default=100, show_default=True,
               help="Samples used by CNBS (the first ones of the same sampling).")

@@ -28,8 +28,8 @@ from ..evaluation.report import by_protocol, correlations, protocols, write_repo
 from ..evaluation.run import DEFAULT_METHODS, PROTOCOL_CHOICES
 from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..parallel import runner
-from .common import (BACKEND_OPTION, NO_CACHE_OPTION, SEED_OPTION, Int, emit_json, force_option, info, json_option,
-                     points_option, progress_enabled)
+from .common import (BACKEND_OPTION, NO_CACHE_OPTION, SEED_OPTION, Command, Int, emit_json, force_option, info,
+                     json_option, points_option, progress_enabled)
 
 
 def _names(text, allowed=None, what="name"):
@@ -52,7 +52,7 @@ def _counts(text) -> list[int]:
     return out
 
 
-@click.command("evaluate")
+@click.command("evaluate", cls=Command)
 @click.argument("dataset_dir", type=click.Path(file_okay=False))
 @click.option("--classes", default=None, help="Comma-separated class folders [default: all].")
 @click.option("--methods", default=",".join(DEFAULT_METHODS), show_default=True,

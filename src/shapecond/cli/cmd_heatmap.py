@@ -10,18 +10,18 @@ from ..errors import InputError
 from ..jsonable import fmt
 from ..selection.cnbs import RESOLVE_FRACTION
 from .cmd_landmarks import _up
-from .common import (IDS_HELP, Float, api_options, emit_json, info, json_option, pop_shape_options, shape_options,
-                     epsilon_options, resolve_epsilon)
+from .common import (IDS_HELP, Command, Float, OutputFile, api_options, emit_json, epsilon_options, info,
+                     json_option, pop_shape_options, resolve_epsilon, shape_options)
 
 
-@click.command("heatmap")
+@click.command("heatmap", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Vertex ids already fixed: " + IDS_HELP + ".")
-@click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the heat map (PNG).")
-@click.option("--html", type=click.Path(dir_okay=False), default=None,
+@click.option("--png", type=OutputFile(), default=None, help="Picture of the heat map (PNG).")
+@click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the heat map (turn it, hover a vertex for its id and value).")
-@click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh coloured by the heat map (PLY).")
+@click.option("--ply", type=OutputFile(), default=None, help="Mesh coloured by the heat map (PLY).")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Effort of the witness searches.")
 @click.option("--resolve-fraction", type=Float(0.0, 1.0), default=RESOLVE_FRACTION, show_default=True,

@@ -5,10 +5,10 @@ from __future__ import annotations
 import click
 
 from ..api import info as describe
-from .common import emit_json, json_option
+from .common import Command, emit_json, json_option
 
 
-@click.command("info")
+@click.command("info", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @json_option
 def command(input_spec, as_json):

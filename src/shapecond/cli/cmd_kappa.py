@@ -13,10 +13,11 @@ import click
 from ..api import kappa
 from ..checks import parse_ids
 from ..jsonable import fmt
-from .common import IDS_HELP, Float, Int, api_options, emit_json, info, json_option, pop_shape_options, shape_options
+from .common import (IDS_HELP, Command, Float, Int, api_options, emit_json, info, json_option,
+                     pop_shape_options, shape_options)
 
 
-@click.command("kappa")
+@click.command("kappa", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Vertex ids (row indices for a matrix) fixed by every map: "

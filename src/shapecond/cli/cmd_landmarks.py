@@ -8,11 +8,11 @@ from ..api import landmarks
 from ..checks import parse_ids
 from ..jsonable import fmt
 from ..selection import METHODS, SCORES
-from .common import (IDS_HELP, Int, api_options, emit_json, info, json_option, pop_shape_options, shape_options,
-                     epsilon_options, resolve_epsilon)
+from .common import (IDS_HELP, Command, Int, OutputFile, api_options, emit_json, epsilon_options, info,
+                     json_option, pop_shape_options, resolve_epsilon, shape_options)
 
 
-@click.command("landmarks")
+@click.command("landmarks", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("-k", "k", type=Int(0, 100_000), required=True, help="Number of landmarks (method user: 0 = all given).")
@@ -30,9 +30,9 @@ from .common import (IDS_HELP, Int, api_options, emit_json, info, json_option, p
               help="Score after each landmark: sigma (the paper's) or scale (δ(ε)) "
                    "[default: scale for cnbs-scale, sigma otherwise].")
 @epsilon_options("--method cnbs-scale or --score scale: ")
-@click.option("--png", type=click.Path(dir_okay=False), default=None, help="Picture of the landmarks (PNG).")
-@click.option("--ply", type=click.Path(dir_okay=False), default=None, help="Mesh with landmarks painted (PLY).")
-@click.option("--html", type=click.Path(dir_okay=False), default=None,
+@click.option("--png", type=OutputFile(), default=None, help="Picture of the landmarks (PNG).")
+@click.option("--ply", type=OutputFile(), default=None, help="Mesh with landmarks painted (PLY).")
+@click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the landmarks in order with their scores.")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option

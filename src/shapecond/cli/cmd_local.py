@@ -14,10 +14,10 @@ from ..api import local_score
 from ..checks import parse_ids
 from ..deformation.energy import ALPHA_RANGE, DEFAULT_ALPHA, ENERGIES
 from ..deformation.local_score import ZERO_TOL
-from .common import IDS_HELP, Float, emit_json, force_option, info, json_option
+from .common import IDS_HELP, Command, Float, OutputFile, emit_json, force_option, info, json_option
 
 
-@click.command("local")
+@click.command("local", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @click.option("--landmarks", "-l", default=None,
               help="Vertex ids (the file's own) to fix: " + IDS_HELP + ".")
@@ -27,9 +27,9 @@ from .common import IDS_HELP, Float, emit_json, force_option, info, json_option
               help="Stretching term: edge springs or as-rigid-as-possible.")
 @click.option("--zero-tol", type=Float(0.0, 1.0, lo_open=True, hi_open=True), default=ZERO_TOL, show_default=True,
               help="Eigenvalues below zero_tol x 2 count as zero modes (score inf).")
-@click.option("--heatmap-png", type=click.Path(dir_okay=False), default=None,
+@click.option("--heatmap-png", type=OutputFile(), default=None,
               help="Also draw the local score with each vertex fixed (modal approximation) to this PNG.")
-@click.option("--html", type=click.Path(dir_okay=False), default=None,
+@click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the local score with each vertex fixed (the doubt field).")
 @force_option
 @json_option

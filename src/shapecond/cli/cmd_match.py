@@ -15,11 +15,11 @@ from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLINGS
 from ..checks import parse_ids
 from ..errors import InputError
 from ..output import atomic_open
-from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, SEED_OPTION, Int, emit_json,
-                     force_option, info, json_option, points_option)
+from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, SEED_OPTION, Command, Int, OutputFile,
+                     emit_json, force_option, info, json_option, points_option)
 
 
-@click.command("match")
+@click.command("match", cls=Command)
 @click.argument("source", metavar="SOURCE")
 @click.argument("target", metavar="TARGET")
 @click.option("--landmarks-source", required=True,
@@ -50,23 +50,26 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
 @click.option("--error-bar/--no-error-bar", default=True, show_default=True,
               help="Estimate the map's error without ground truth: δ(ε̂) on SOURCE with the landmarks fixed, ε̂ "
                    "the map's own RMS distortion (in the summary; the doubt field with --doubt-ply, --doubt-png).")
-@click.option("--doubt-png", type=click.Path(dir_okay=False), default=None,
+@click.option("--doubt-png", type=OutputFile(), default=None,
               help="Picture of SOURCE coloured by the error bar's doubt field (PNG), landmarks ringed.")
-@click.option("--doubt-ply", type=click.Path(dir_okay=False), default=None,
+@click.option("--doubt-ply", type=OutputFile(), default=None,
               help="SOURCE coloured by the error bar's doubt field: how far the widest map as distorted as this "
                    "one moves each point (PLY).")
 @LARGEST_COMPONENT_OPTION
 @NO_CACHE_OPTION
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
+@click.option("-o", "--output", required=True, type=OutputFile(),
               help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
 @click.option("--suggest", type=Int(0, 1000), default=0, show_default=True,
               help="Suggest this many next landmarks, read off the map and its error bar (each with its provisional "
                    "image and the bar expected after it): click them, add them to the landmarks, re-run.")
-@click.option("--html", type=click.Path(dir_okay=False), default=None,
+@click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the map: colours carried source -> target, linked landmarks.")
 @click.option("--truth", default=None,
-              help="--html: ground-truth map (a file like -o's, or 'same-ids' for shapes with a common vertex "
-                   "order) to show the error field.")
+              help="--html: the ground truth, to show the error field: a map file like -o's (line i: the true "
+                   "TARGET id of SOURCE vertex i; -1, and only -1, for none), 'same-ids' (shapes with a common "
+                   "vertex order), or SOURCE.vts,TARGET.vts, the two shapes' reference files of a remeshed "
+                   "release (the error is then known at the source's reference vertices). Read and checked "
+                   "before matching.")
 @force_option
 @json_option
 def command(source, target, landmarks_source, landmarks_target, output, **o):
@@ -85,8 +88,9 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
         raise InputError("--doubt-ply, --doubt-png and --suggest read the error bar: drop --no-error-bar")
     t0 = time.perf_counter()
     lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
-    result = match(source, target, parse_ids(landmarks_source, "--landmarks-source"),
-                   parse_ids(landmarks_target, "--landmarks-target"), matcher=o["matcher"], n_points=o["points"],
+    ids_s, ids_t = parse_ids(landmarks_source, "--landmarks-source"), parse_ids(landmarks_target, "--landmarks-target")
+    shapes = _surfaces_up_front(source, target, o)
+    result = match(*shapes, ids_s, ids_t, matcher=o["matcher"], n_points=o["points"],
                    seed=o["seed"], backend=o["geodesic_backend"], dense=o["dense"], samples=o["samples"],
                    cache=not o["no_cache"], force=o["force"], largest_component=o["largest_component"],
                    error_bar=o["error_bar"], suggest=o["suggest"], **lh05)
@@ -98,10 +102,8 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     if o["doubt_png"]:
         info(f"wrote {result.plot(path=o['doubt_png'])}")
     if o["html"]:
-        from ..viz.pages import read_truth
-
         paths = dict(source=source, target=target, output=output, html=o["html"])  # for the page's command
-        info(f"wrote {result.to_html(o['html'], truth=read_truth(o['truth']), command=paths)}")
+        info(f"wrote {result.to_html(o['html'], truth=o['truth'], command=paths)}")
     summary = dict(result.summary, source=str(source), target=str(target), output=str(out),
                    seconds=time.perf_counter() - t0)
     if o["as_json"]:
@@ -114,6 +116,26 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
         for i, s in enumerate(summary.get("suggestions", []), 1):
             info(f"next landmark {i}: source {s['source_id']} (provisional image {s['image_id']}), "
                  f"bar after it {s['bar_after']:.3g} sqrt(area)")
+
+
+def _surfaces_up_front(source, target, o: dict) -> tuple:
+    """SOURCE and TARGET, loaded here when an output draws them: a distance matrix is refused and
+    ``--truth`` read and checked against both shapes (``o["truth"]`` becomes what it holds) before the
+    matching; otherwise the names, loaded by ``match``."""
+    drawn = [name for name in ("html", "doubt_ply", "doubt_png") if o[name]]
+    if not drawn:
+        return source, target
+    from ..api import load
+    from ..viz.pages import read_truth, truth_map
+
+    truth = read_truth(o["truth"])
+    shapes = tuple(load(x, largest_component=o["largest_component"], force=o["force"]) for x in (source, target))
+    if any(isinstance(x, np.ndarray) for x in shapes):
+        raise InputError(f"--{drawn[0].replace('_', '-')} draws the shapes, but a distance matrix has no surface")
+    if truth is not None:
+        truth_map(truth, *shapes)
+    o["truth"] = truth
+    return shapes
 
 
 def _write_doubt(result, path) -> None:

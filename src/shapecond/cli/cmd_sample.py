@@ -12,14 +12,15 @@ from ..api import metric_shape
 from ..checks import parse_ids
 from ..errors import InputError
 from ..output import write_bytes
-from .common import IDS_HELP, api_options, emit_json, info, json_option, pop_shape_options, shape_options
+from .common import (IDS_HELP, Command, OutputFile, api_options, emit_json, info, json_option,
+                     pop_shape_options, shape_options)
 
 
-@click.command("sample")
+@click.command("sample", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Vertex ids placed first: " + IDS_HELP + ".")
-@click.option("-o", "--output", required=True, type=click.Path(dir_okay=False), help="Output .npz file.")
+@click.option("-o", "--output", required=True, type=OutputFile(), help="Output .npz file.")
 @json_option
 def command(input_spec, landmarks, output, as_json, **kwargs):
     """Farthest-point samples and their distance matrix (diameter 1) into an .npz file.

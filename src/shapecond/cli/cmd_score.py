@@ -19,11 +19,11 @@ import numpy as np
 from ..api import score
 from ..checks import parse_ids
 from ..jsonable import fmt
-from .common import (IDS_HELP, Float, api_options, emit_json, epsilon_options, info, json_option, pop_shape_options,
-                     resolve_epsilon, shape_options)
+from .common import (IDS_HELP, Command, Float, OutputFile, api_options, emit_json, epsilon_options, info,
+                     json_option, pop_shape_options, resolve_epsilon, shape_options)
 
 
-@click.command("score")
+@click.command("score", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
 @shape_options
 @click.option("--landmarks", default=None, help="Input vertex ids (row indices for a matrix) fixed by every "
@@ -35,12 +35,12 @@ from .common import (IDS_HELP, Float, api_options, emit_json, epsilon_options, i
               help="Seconds for each of the exact and LP solves.")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Work spent by the witness search.")
-@click.option("--witness-png", type=click.Path(dir_okay=False), default=None,
+@click.option("--witness-png", type=OutputFile(), default=None,
               help="Write a picture of the witness map (meshes and point clouds).")
 @epsilon_options("")
-@click.option("--scale-witness-png", type=click.Path(dir_okay=False), default=None,
+@click.option("--scale-witness-png", type=OutputFile(), default=None,
               help="Write a picture of the scale-aware witness (the widest self-map within ε).")
-@click.option("--html", type=click.Path(dir_okay=False), default=None,
+@click.option("--html", type=OutputFile(), default=None,
               help="Write a self-contained HTML page of the witness maps (turn the shape, hover vertex ids).")
 @json_option
 def command(input_spec, **o):

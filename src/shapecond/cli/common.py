@@ -6,7 +6,9 @@
 (infinite values as the string "inf", missing ones as null).  Numeric options
 use the parameter types ``Int``, ``Float`` and ``SEED``, which call the checks
 of ``shapecond.checks``: a bad value gets the same one-line message as from
-the Python functions.
+the Python functions.  Every sub-command is a :class:`Command`: before it runs,
+the files it writes (options of type :class:`OutputFile`) are checked against
+the files it reads and against each other (``output.check_distinct``).
 """
 
 from __future__ import annotations
@@ -62,6 +64,53 @@ class Seed(click.ParamType):
 
 
 SEED = Seed()
+
+
+class OutputFile(click.Path):
+    """A file a command writes: a non-empty name, not a folder; checked by :class:`Command`."""
+
+    def __init__(self):
+        super().__init__(dir_okay=False)
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value.strip():
+            self.fail("an empty file name", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+def _param_label(param) -> str:
+    return param.opts[0] if isinstance(param, click.Option) else param.human_readable_name
+
+
+def _named_files(value):
+    """The names a parameter value may read: itself, its comma-separated parts, or those of each value."""
+    if isinstance(value, (tuple, list)):
+        return [n for v in value for n in _named_files(v)]
+    if not isinstance(value, str) or not value or value.startswith("demo:"):
+        return []
+    names = [value] + ([v for v in value.split(",") if v] if "," in value else [])
+    return names + [n[:-5] + ".tri" for n in names if n.lower().endswith(".vert")]  # a TOSCA pair
+
+
+class Command(click.Command):
+    """A sub-command whose outputs are checked before it runs: none may be one of its inputs or another
+    of its outputs (``output.check_distinct``)."""
+
+    def invoke(self, ctx):
+        from ..output import check_distinct
+
+        outputs, inputs = [], []
+        for param in self.params:
+            value = ctx.params.get(param.name)
+            if isinstance(param.type, OutputFile):
+                outputs += [(_param_label(param), v) for v in (value if isinstance(value, tuple) else [value])
+                            if v is not None]
+            else:
+                inputs += [(_param_label(param), name) for name in _named_files(value)]
+        check_distinct(outputs, inputs)
+        return super().invoke(ctx)
+
+
 #: Largest N accepted by the options (the memory and time guards refuse far less).
 MAX_POINTS = 100_000
 

@@ -96,7 +96,20 @@ class ClassFolder:
 
 
 def _mesh_files(folder: Path) -> list[Path]:
-    return [p for p in folder.iterdir() if p.suffix.lower() in MESH_SUFFIXES and p.is_file()]
+    """The mesh files of a folder, by suffix; one named like a mesh that is not a readable regular file
+    (a FIFO, a device, a dangling link or a link loop) is refused, not dropped."""
+    out = []
+    for p in sorted(folder.iterdir()):
+        if p.suffix.lower() not in MESH_SUFFIXES:
+            continue
+        try:
+            regular = p.is_file()
+        except OSError:  # a link loop
+            regular = False
+        if not regular:
+            raise InputError(f"{p}: not a regular file (a FIFO, a device, a dangling link or a link loop)")
+        out.append(p)
+    return out
 
 
 def _number_order(p: Path):
@@ -133,10 +146,7 @@ def _remeshed_class(name: str, files: list[Path], corres: Path) -> ClassFolder:
     files = sorted(files, key=_number_order)
     if len(files) < 2:
         raise InputError(f"class {name}: a class needs at least two shapes, found {len(files)}")
-    stems = [p.stem for p in files]
-    if len(set(stems)) != len(stems):
-        dup = next(s for s in stems if stems.count(s) > 1)
-        raise InputError(f"class {name}: two shapes named {dup!r} (one .vts file cannot serve both)")
+    _unique_names(name, files)
     missing = [p for p in files if not (corres / f"{p.stem}.vts").is_file()]
     if missing:
         raise InputError(f"{name}: no corres/{missing[0].stem}.vts for {missing[0].name} "
@@ -157,7 +167,17 @@ def read_class(folder) -> ClassFolder:
     files = sorted(_mesh_files(folder), key=_number_order)
     if len(files) < 2:
         raise InputError(f"{folder}: a class needs at least two shapes, found {len(files)}")
+    _unique_names(folder.name, files)
     return ClassFolder(folder.name, tuple(files), "shared")
+
+
+def _unique_names(name: str, files: list[Path]) -> None:
+    """Refuse two shapes of one name (``blob1.off`` beside ``blob1.ply``): records, ``.vts`` files and
+    pairs lists name shapes without their suffix."""
+    stems = [p.stem for p in files]
+    dup = next((s for s in stems if stems.count(s) > 1), None)
+    if dup is not None:
+        raise InputError(f"class {name}: two shapes named {dup!r} ({', '.join(p.name for p in files if p.stem == dup)})")
 
 
 def _is_class(p: Path) -> bool:

@@ -47,6 +47,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.sparse as sp
 
 from shapecond.shapes.geometry import Geometry
 
@@ -79,19 +80,16 @@ def distance_gradients(geometry: Geometry, rows: np.ndarray) -> tuple[np.ndarray
     V = np.asarray(geometry.vertices, dtype=np.float64)
     F = np.asarray(geometry.faces, dtype=np.int64)
     normals, twice_area = _face_frames(V, F)
-    n = V.shape[0]
+    n, m = V.shape[0], F.shape[0]
+    # vertex <- face sums as one sparse product (each face counted at its three corners)
+    to_vertex = sp.csr_matrix((np.ones(3 * m), (F.T.reshape(-1), np.tile(np.arange(m), 3))), shape=(n, m))
     # the face gradient's Σ_i f_i (n × e_i): e_0 = v2 − v1, e_1 = v0 − v2, e_2 = v1 − v0
     rot = [np.cross(normals, V[F[:, (i + 2) % 3]] - V[F[:, (i + 1) % 3]]) for i in range(3)]
-    vnormal = np.zeros((n, 3))
-    for i in range(3):
-        np.add.at(vnormal, F[:, i], normals * twice_area[:, None])
+    vnormal = to_vertex @ (normals * twice_area[:, None])
     vnormal /= np.maximum(np.linalg.norm(vnormal, axis=1), 1e-300)[:, None]
     grads = np.zeros((rows.shape[0], n, 3))
     for j, f in enumerate(np.asarray(rows, dtype=np.float64)):
-        g_face = sum(f[F[:, i]][:, None] * rot[i] for i in range(3))  # = 2A ∇f: area weight built in
-        g = np.zeros((n, 3))
-        for i in range(3):
-            np.add.at(g, F[:, i], g_face)
+        g = to_vertex @ sum(f[F[:, i]][:, None] * rot[i] for i in range(3))  # faces' 2A ∇f: area-weighted
         g -= np.einsum("ij,ij->i", g, vnormal)[:, None] * vnormal
         grads[j] = g / np.maximum(np.linalg.norm(g, axis=1), 1e-300)[:, None]
     return grads, vnormal

@@ -156,8 +156,7 @@ def match_surfaces(source: SampledSurface, target: SampledSurface, landmarks_sou
     source, ils = insert_landmarks(source, ls, solvers[0])
     target, ilt = insert_landmarks(target, lt, solvers[1])
     extra = dict(options.matcher_options)
-    if "sides" not in extra:
-        extra["sides"] = sample_sides(source, ils, target, ilt)
+    extra.setdefault("sides", sample_sides(source, ils, target, ilt))
     sm = match_samples(source.D, target.D, ils, ilt, options.matcher, seed=options.seed, **extra)
     vmap = _extend(source, target, sm.t, ls.size, options)
     vmap[ls] = lt  # landmarks map exactly onto their images
@@ -278,7 +277,9 @@ def _match_same_ids(src: SampledSurface, target_geometry, ls, lt, options: Match
     tgt, truth = carry_samples(src, target_geometry, seed=options.seed)  # refuses different vertex ids
     if not np.array_equal(ls, lt):
         raise InputError("with same-ids samples the target landmarks must be the source's vertex ids")
-    sm = match_samples(src.D, tgt.D, ils, truth[ils], options.matcher, seed=options.seed, **options.matcher_options)
+    extra = dict(options.matcher_options)
+    extra.setdefault("sides", sample_sides(src, ils, tgt, truth[ils]))
+    sm = match_samples(src.D, tgt.D, ils, truth[ils], options.matcher, seed=options.seed, **extra)
     if options.dense in DENSE_METHODS:
         vmap = dense_map(src, tgt, sm.t, method=options.dense)
     else:  # the carried samples are shuffled: the landmark pairs are (src.samples[i], tgt.samples[truth[i]])

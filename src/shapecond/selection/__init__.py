@@ -21,9 +21,10 @@ from __future__ import annotations
 import inspect
 import math
 import time
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 from .._options import with_options
+from ..checks import check_float
 from ..errors import InputError
 from ..threads import single_blas_thread
 from .fps import fps_landmarks
@@ -101,6 +102,8 @@ def check_method_options(method: str, options) -> None:
     if unknown:
         raise InputError(f"landmark method {method!r} has no option {unknown[0]!r} "
                          f"(its options: {', '.join(sorted(method_options(method)))})")
+    if options.get("epsilon") is not None:  # every method takes it; a bad value is refused by all
+        check_float(options["epsilon"], "epsilon", lo=0.0)
 
 
 def monotone(values) -> list:
@@ -213,6 +216,8 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, **kw) -
     check_method_options(method, kw)
     kw = dict(kw)
     common = LandmarkOptions(**{key: kw.pop(key) for key in COMMON_OPTIONS if key in kw})
+    if common.epsilon is not None:  # checked for every method, not only where it is used
+        common = replace(common, epsilon=check_float(common.epsilon, "epsilon", lo=0.0))
     score = common.score or ("scale" if method == "cnbs-scale" else "sigma")
     if score not in SCORES:
         raise InputError(f"unknown score {score!r}; choose sigma or scale")

@@ -259,7 +259,10 @@ def write_mesh(path, vertices, faces, colors=None, file_type: str | None = None)
     """Write a mesh (or a point cloud when ``faces`` is None) with optional RGB(A) colours.
 
     The format follows the suffix (``file_type`` overrides it; PLY without one);
-    vertex order is kept and the file is written atomically.
+    vertex order is kept and the file is written atomically.  Text formats (OFF,
+    OBJ) are written with fixed decimals, enough for 10 significant digits of the
+    largest coordinate, so a tiny shape keeps its size (trimesh's default of 10
+    decimals wrote a mesh scaled by 1e-25 as one point).
     """
     import trimesh
 
@@ -269,8 +272,16 @@ def write_mesh(path, vertices, faces, colors=None, file_type: str | None = None)
     else:
         obj = trimesh.Trimesh(vertices, faces, vertex_colors=colors, process=False)
     kind = file_type or path.suffix.lstrip(".").lower() or "ply"
+    options = {"digits": _decimals(vertices)} if kind in ("off", "obj") else {}
     with atomic_open(path) as fh:
-        obj.export(file_obj=fh, file_type=kind)
+        obj.export(file_obj=fh, file_type=kind, **options)
+
+
+def _decimals(vertices) -> int:
+    """Fixed decimals that keep 10 significant digits of the largest finite coordinate (at least 10)."""
+    V = np.asarray(vertices, dtype=float)
+    top = float(np.max(np.abs(V[np.isfinite(V)]), initial=0.0))
+    return 10 if top == 0 or top >= 1 else min(10 + int(np.ceil(-np.log10(top))), 340)
 
 
 __all__ = ["CLOUD_SUFFIXES", "MESH_SUFFIXES", "load_geometry", "load_input", "load_npy",

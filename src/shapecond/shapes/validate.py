@@ -72,7 +72,8 @@ def mesh_problems(vertices: np.ndarray, faces: np.ndarray | None) -> list[str]:
     elif np.max(np.abs(vertices)) > MAX_COORD:
         problems.append(f"coordinates up to {np.max(np.abs(vertices)):.3g} are beyond +-{MAX_COORD:g}; rescale the shape")
     elif faces is not None and unit_length(vertices) == 0:  # e.g. a tiny mesh written with fixed decimals
-        problems.append(f"all {vertices.shape[0]} vertices are at one point: the shape has no size")
+        problems.append(f"all {vertices.shape[0]} vertices have the same coordinates, so the shape has no size "
+                        "(a tiny shape written with too few decimals? write it with more digits or rescale it)")
     elif faces is not None and unit_length(vertices) < MIN_SIZE:
         problems.append(f"the shape is {unit_length(vertices):.3g} across, below {MIN_SIZE:g}; rescale it")
     if faces is None:

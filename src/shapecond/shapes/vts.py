@@ -52,9 +52,11 @@ def read_vts(path, n_vertices: int | None = None, name: str | None = None) -> np
         raise InputError(f"{label}: no reference points (the file holds no ids)")
     ids = np.empty(len(tokens), dtype=np.int64)
     for j, (line, words) in enumerate(tokens):
-        if len(words) != 1 or not words[0].isdigit():
+        if len(words) != 1 or not (words[0].isascii() and words[0].isdigit()):  # '²'.isdigit() is True
             raise InputError(f"{label}, line {line}: expected one positive integer vertex id, got "
                              f"{' '.join(words)[:40]!r}")
+        if len(words[0].lstrip("0")) > 18:  # beyond int64, and beyond any mesh
+            raise InputError(f"{label}, line {line}: vertex id {words[0][:30]} is out of range")
         ids[j] = int(words[0])
     if ids.min() == 0:
         raise InputError(f"{label}, line {tokens[int(np.argmin(ids))][0]}: vertex id 0, but .vts ids are "

@@ -134,7 +134,9 @@ def match_errors(src, tgt, vmap, truth, n_points: int = 200, backend: str = "hea
     """Error field of a dense map (internal ids): per source vertex, % of half the target's diameter.
 
     The geodesic distance on the target between the matched and the true vertex is
-    measured at ``n_points`` farthest-point samples of the source (Euclidean FPS) and
+    measured at ``n_points`` farthest-point samples (Euclidean FPS) of the source
+    vertices that have both a match and a true image (all of them for a complete
+    ground truth; the reference vertices for a truth of ``.vts`` files) and
     interpolated between them as heat maps are (``viz.heatmap.idw``).  Returns
     (field, errors at the samples, sample vertices).
     """
@@ -143,16 +145,31 @@ def match_errors(src, tgt, vmap, truth, n_points: int = 200, backend: str = "hea
     from ..shapes.sampling import farthest_point_sampling
     from .scene import idw
 
-    k = min(int(n_points), src.n_vertices)
-    samples = np.asarray(farthest_point_sampling(DistanceSolver(src, "euclidean"), k, seed=0).samples, np.int64)
-    keep = (vmap[samples] >= 0) & (truth[samples] >= 0)
-    samples = samples[keep]
-    if not samples.size:
+    known = np.flatnonzero((vmap >= 0) & (truth >= 0))
+    if not known.size:
         raise InputError("no source vertex has both a match and a ground-truth image")
+    solver = DistanceSolver(src, "euclidean")
+    if known.size < src.n_vertices:
+        solver = _Among(solver, known)
+    k = min(int(n_points), solver.n)
+    picked = np.asarray(farthest_point_sampling(solver, k, seed=0).samples, np.int64) if k >= 3 else np.arange(k)
+    samples = known[picked] if known.size < src.n_vertices else picked
     rows = DistanceSolver(tgt, backend).distances(truth[samples])
     raw = errors_from_rows(rows, vmap[samples])
     err = normalise(raw, float(rows.max()) or 1.0)
     return idw(np.asarray(src.vertices, float), samples, err), err, samples
+
+
+class _Among:
+    """A distance solver restricted to the vertices ``keep`` (rows and columns), for sampling among them."""
+
+    block = 1
+
+    def __init__(self, solver, keep):
+        self.solver, self.keep, self.n = solver, np.asarray(keep), len(keep)
+
+    def distances(self, sources):
+        return self.solver.distances(self.keep[np.atleast_1d(sources)])[:, self.keep]
 
 
 @dataclass(frozen=True)
@@ -390,9 +407,31 @@ def demo_page(shape, score, small, values, chosen) -> str:
 
 # --- results of the Python interface ------------------------------------------------------------
 
+def _check_options(kw: dict, fn, given=()) -> None:
+    """Refuse in one line a keyword that the page function ``fn`` does not take (or that is set here)."""
+    import inspect
+
+    known = [p.name for p in inspect.signature(fn).parameters.values()
+             if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is not p.empty
+             and p.name not in given]
+    unknown = sorted(set(kw) - set(known))
+    if unknown:
+        raise InputError(f"to_html() got an unknown option {unknown[0]!r} (its options: {', '.join(known) or 'none'})")
+
+
+#: For each result type: the page function whose options ``to_html`` takes, and those it sets itself.
+_PAGE_OPTIONS = {"ScoreResult": ("score_page", ()), "HeatMapResult": ("heatmap_page", ("landmarks", "lines")),
+                 "LandmarkResult": ("landmarks_page", ()), "MatchResult": ("match_page", ("fields",)),
+                 "LocalResult": ("local_page", ("fixed", "result"))}
+
+
 def result_page(result, **kw) -> str:
     """The page of a result of ``shapecond``'s functions (score, heatmap, landmarks, match, local_score)."""
     kind = type(result).__name__
+    if kind in _PAGE_OPTIONS:
+        name, given = _PAGE_OPTIONS[kind]
+        _check_options({k: v for k, v in kw.items() if not (kind == "MatchResult" and k == "truth")},
+                       globals()[name], given)
     if kind == "ScoreResult":
         return score_page(result, **kw)
     if kind == "HeatMapResult":
@@ -418,17 +457,7 @@ def _match_result_page(result, truth=None, suggestions=(), command=None, up=None
     vmap = np.full(src.n_vertices, -1, dtype=np.int64)
     ok = result.map[src.ids] >= 0
     vmap[ok] = tgt.to_internal(result.map[src.ids][ok])
-    t = None
-    if truth is not None:
-        if isinstance(truth, str) and truth == "same-ids":
-            truth = np.arange(int(src.ids.max()) + 1)
-        truth = np.asarray(truth)
-        if truth.ndim != 1 or truth.size <= int(src.ids.max()) or not np.issubdtype(truth.dtype, np.integer):
-            raise InputError(f"the ground truth needs one target vertex id per source vertex id "
-                             f"(0..{int(src.ids.max())}), got {truth.shape[0] if truth.ndim else 0}")
-        t = np.full(src.n_vertices, -1, dtype=np.int64)
-        known = truth[src.ids] >= 0  # -1: a source vertex without a true image
-        t[known] = tgt.to_internal(truth[src.ids][known])
+    t = None if truth is None else truth_map(truth, src, tgt)
     s = result.summary
     lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
     doubt = None if result.doubt is None else result.doubt[src.ids]
@@ -462,18 +491,104 @@ def inline_result(result, height: int = 640):
         return None
 
 
+@dataclass(frozen=True)
+class ReferenceTruth:
+    """The ground truth of a remeshed release (``shapes.vts``): 0-based input vertex ids of the source
+    (``source``) and of the target (``target``) at each reference point; equal rows correspond."""
+
+    source: np.ndarray
+    target: np.ndarray
+    names: tuple = ("source .vts", "target .vts")
+
+
 def read_truth(spec):
-    """``--truth``: None, ``"same-ids"``, or a map file (line i: the target vertex id of source vertex i)."""
-    if spec is None or spec == "same-ids":
+    """``--truth`` read and checked before any work: None, ``"same-ids"``, a ``ReferenceTruth`` from
+    ``"SOURCE.vts,TARGET.vts"``, or the ids of a map file (line i: the target vertex id of source vertex
+    i, -1 for none; one integer per line, ``#`` comments).  Files must be regular files (a FIFO or
+    ``/dev/zero`` is refused without reading); ``InputError`` for anything else."""
+    if spec is None or (isinstance(spec, str) and spec == "same-ids"):
         return spec
+    text = str(spec)
+    if not text.strip():
+        raise InputError("--truth: an empty file name")
+    parts = text.split(",")
+    if not Path(text).exists() and len(parts) == 2 and all(p.lower().endswith(".vts") for p in parts):
+        from ..shapes.vts import read_vts
+
+        a, b = read_vts(parts[0]), read_vts(parts[1])
+        if a.size != b.size:
+            raise InputError(f"--truth: {parts[0]} has {a.size} reference points but {parts[1]} has {b.size}; "
+                             "give the two .vts files of one release")
+        return ReferenceTruth(a, b, (Path(parts[0]).name, Path(parts[1]).name))
+    if not Path(text).exists() and "," in text:
+        raise InputError(f"--truth {text}: give a map file, 'same-ids' or two .vts files SOURCE.vts,TARGET.vts")
+    return _read_map(Path(text))
+
+
+def _read_map(path: Path) -> np.ndarray:
+    """The ids of a ground-truth map file (``read_truth``)."""
+    from ..checks import MAX_ID
+    from ..shapes.formats import read_text
+
+    ids = []
+    for number, line in enumerate(read_text(path).splitlines(), 1):
+        words = line.split("#", 1)[0].split()
+        if not words:
+            continue
+        word = words[0]
+        digits = word[1:] if word.startswith("-") else word
+        if len(words) != 1 or not (digits.isascii() and digits.isdigit()):
+            raise InputError(f"{path.name}, line {number}: not a ground-truth map line (one integer target "
+                             f"vertex id per line), got {line.strip()[:40]!r}")
+        value = int(word)
+        if value < -1:
+            raise InputError(f"{path.name}, line {number}: target vertex id {value}; only -1 means 'no true image'")
+        if value > MAX_ID:
+            raise InputError(f"{path.name}, line {number}: target vertex id {word[:30]} is too large")
+        ids.append(value)
+    if not ids:
+        raise InputError(f"{path.name}: no ids in the ground-truth map")
+    return np.asarray(ids, dtype=np.int64)
+
+
+def truth_map(truth, src, tgt) -> np.ndarray:
+    """The ground truth as the target's internal vertex per source internal vertex (-1: unknown).
+
+    ``truth``: ``"same-ids"``, a ``ReferenceTruth`` (known at the source's reference vertices only; a
+    vertex at several reference points takes the first), a path or ``"A.vts,B.vts"`` (``read_truth``),
+    or one target id per source id (-1: no true image).  ``InputError`` when it does not fit the shapes.
+    """
+    if isinstance(truth, (str, Path)) and truth != "same-ids":
+        truth = read_truth(truth)
+    n_ids = int(src.ids.max()) + 1
+    t = np.full(src.n_vertices, -1, dtype=np.int64)
+    if isinstance(truth, ReferenceTruth):
+        for ids, g, name in ((truth.source, src, truth.names[0]), (truth.target, tgt, truth.names[1])):
+            if ids.size and int(ids.max()) > int(g.ids.max()):
+                raise InputError(f"--truth {name}: vertex id {int(ids.max()) + 1} (1-based) is out of range for "
+                                 f"{g.name} ({int(g.ids.max()) + 1} vertices)")
+        s_int, t_int = _internal(src, truth.source), _internal(tgt, truth.target)
+        vertices, first = np.unique(s_int, return_index=True)  # the first reference point of a vertex wins
+        t[vertices] = t_int[first]
+        return t
+    if isinstance(truth, str):  # "same-ids"
+        truth = np.arange(n_ids)
+    truth = np.asarray(truth)
+    if truth.ndim != 1 or truth.size < n_ids or not np.issubdtype(truth.dtype, np.integer):
+        raise InputError(f"the ground truth needs one target vertex id per source vertex id "
+                         f"(0..{n_ids - 1}), got {truth.shape[0] if truth.ndim else 0}")
+    if truth.size and int(truth.min()) < -1:
+        raise InputError(f"ground-truth id {int(truth.min())}: only -1 means 'no true image'")
+    known = truth[src.ids] >= 0  # -1: a source vertex without a true image
+    t[known] = _internal(tgt, truth[src.ids][known])
+    return t
+
+
+def _internal(g, ids) -> np.ndarray:
     try:
-        truth = np.loadtxt(spec, dtype=np.int64, ndmin=1)
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{spec}: not a ground-truth map (one integer target vertex id per line): "
-                         f"{str(exc).splitlines()[0][:80]}") from None
-    if truth.ndim != 1:
-        raise InputError(f"{spec}: a ground-truth map has one id per line")
-    return truth
+        return g.to_internal(ids)
+    except InputError as exc:
+        raise InputError(f"the ground truth: {exc}") from None
 
 
 def write_evaluation_html(ev, folder, text: str, nulls: dict) -> str:

@@ -198,6 +198,8 @@ def draw_scene(fig, scene: Scene, *, labels: bool = True, extras=()) -> Figure:
     nv, nr = len(scene.views), len(scene.layers)
     if fig is None:
         fig = new_figure(figsize=(3.4 * nv + 0.9, 3.6 * nr))
+    elif not isinstance(fig, Figure):
+        raise InputError(f"fig must be a matplotlib Figure or None, got {type(fig).__name__}")
     axes = fig.subplots(nr, nv, squeeze=False)
     extras = list(extras) + [None] * (nr - len(extras))
     for r, layer in enumerate(scene.layers):
