@@ -25,7 +25,7 @@ import click
 from ..errors import InputError
 from ..evaluation import evaluate
 from ..evaluation.report import by_protocol, correlations, protocols, write_report
-from ..evaluation.run import DEFAULT_METHODS, PROTOCOL_CHOICES
+from ..evaluation.run import DEFAULT_MATCHERS, DEFAULT_METHODS, PROTOCOL_CHOICES
 from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..parallel import runner
 from .common import (BACKEND_OPTION, NO_CACHE_OPTION, SEED_OPTION, Command, Int, emit_json, force_option, info,
@@ -58,7 +58,7 @@ def _counts(text) -> list[int]:
 @click.option("--methods", default=",".join(DEFAULT_METHODS), show_default=True,
               help="Landmark methods (shapecond.selection), and cnbs-scale-hat: CNBS-scale at each class's level "
                    "read off its matched maps (no ground truth).")
-@click.option("--matchers", default="lh05,faq,zoomout", show_default=True,
+@click.option("--matchers", default=",".join(DEFAULT_MATCHERS), show_default=True,
               help="Matchers: lh05, faq (on samples, then the dense stage), zoomout (from the landmarks alone; "
                    "not in the corresponding protocol, which matches samples).")
 @click.option("--counts", default="3", show_default=True,

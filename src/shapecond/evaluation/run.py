@@ -34,6 +34,8 @@ from .records import Evaluation
 #: ``protocol`` values: one protocol, both shared-order ones, or "auto" (remeshed where there are .vts files).
 PROTOCOL_CHOICES = ("auto",) + PROTOCOLS + ("both",)
 DEFAULT_METHODS = ("fps", "pls", "hks", "cnbs", "cnbs-scale")
+#: Matchers of an evaluation unless told: every one (the corresponding protocol runs the sample matchers).
+DEFAULT_MATCHERS = ("lh05", "faq", "zoomout")
 
 
 @dataclass(frozen=True)
@@ -64,7 +66,7 @@ class EvaluationOptions:
 
     classes: tuple | None = None
     methods: tuple = DEFAULT_METHODS
-    matchers: tuple = ("lh05", "faq")
+    matchers: tuple = DEFAULT_MATCHERS
     protocol: str = "auto"
     counts: tuple = (3,)
     n_points: int | None = None
