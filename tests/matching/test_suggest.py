@@ -43,13 +43,13 @@ def test_a_region_carried_elsewhere_is_suggested_first_and_the_bar_does_not_grow
     wrong = rows < np.quantile(rows, 0.08)
     vmap[wrong] = far                                   # ... every vertex of it is sent to one far vertex
     bar, coarse, Dt = bar_and_samples(src, g, vmap, 3)
-    got = suggest_landmarks(coarse, Dt, 3, bar.epsilon, bar.doubt, vmap, g.ids, k=2)
+    got = suggest_landmarks(coarse, Dt, bar, 3, vmap, g.ids, k=2)
     assert len(got) == 2 and wrong[got[0].vertex]       # the first point lies in the region carried away
     assert got[0].image_id == g.ids[far] and got[0].gain > 0
     assert got[1].vertex != got[0].vertex
     assert got[1].bar_after <= got[0].bar_after + 1e-12 <= bar.bar + 1e-9   # fixing more never widens the bar
     with pytest.raises(InputError):
-        suggest_landmarks(coarse, Dt, 3, bar.epsilon, bar.doubt, vmap, g.ids, k=0)
+        suggest_landmarks(coarse, Dt, bar, 3, vmap, g.ids, k=0)
 
 
 def test_match_suggests_with_the_error_bar_and_refuses_without_it():

@@ -130,8 +130,7 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
         summary["error_bar"] = bar.to_dict()
         doubt = np.full(lines.size, np.nan)
         doubt[src.ids] = bar.doubt[coarse.nearest]
-        advice = partial(suggest_landmarks, coarse, Dt, len(ids_s), bar.epsilon, bar.doubt, m.vertex_map, tgt.ids,
-                         seed=opts.seed)
+        advice = partial(suggest_landmarks, coarse, Dt, bar, len(ids_s), m.vertex_map, tgt.ids, seed=opts.seed)
     result = MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)), doubt, advice)
     if suggest:
         result.suggest(suggest)  # recorded in the summary

@@ -92,17 +92,16 @@ def cell_gains(D, fixed, suspicion) -> np.ndarray:
     return gains
 
 
-def suggest_landmarks(coarse, D_images, n_landmarks: int, epsilon: float, doubt, vertex_map, target_ids,
-                      k: int = 1, seed: int = 0) -> list[Suggestion]:
+def suggest_landmarks(coarse, D_images, bar, n_landmarks: int, vertex_map, target_ids, k: int = 1,
+                      seed: int = 0) -> list[Suggestion]:
     """The ``k`` next landmarks of a match, in order (module docstring).
 
     Parameters
     ----------
     coarse : the bar's SampledSurface (landmarks first; ``error_bar.bar_surface``).
     D_images : (n, n) the target's distances between the images of its samples, sqrt(area) units.
+    bar : the map's ``error_bar.ErrorBar`` on these samples (its level ``epsilon`` and ``doubt``).
     n_landmarks : landmarks among its first samples.
-    epsilon : the bar's level.
-    doubt : (n,) the bar's doubt field on its samples.
     vertex_map : (n_source,) internal target vertex of every source vertex (the found map).
     target_ids : input ids of the target's internal vertices.
     k : how many points; seed : of the δ searches.
@@ -114,7 +113,7 @@ def suggest_landmarks(coarse, D_images, n_landmarks: int, epsilon: float, doubt,
     if not fixed:
         raise InputError("suggesting a next landmark needs at least one landmark")
     r = landmark_disagreement(D, D_images, n_landmarks)
-    doubt = np.asarray(doubt, dtype=np.float64)
+    epsilon, doubt = bar.epsilon, np.asarray(bar.doubt, dtype=np.float64)
     floor = resolution(D, n)
     evidence = np.maximum(r - float(epsilon), 0.0)
     out = []

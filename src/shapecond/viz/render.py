@@ -29,8 +29,8 @@ import numpy as np
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
+from ..errors import InputError
 from ..output import atomic_open
-
 from .scene import AMBIENT, DEFAULT_VIEWS, DIFFUSE, FACING, Scene, landmark_colour, make_scene, view_label
 
 __all__ = ["draw_rows", "draw_scene", "new_figure", "render_png", "render_rows", "render_scene", "save_figure",
