@@ -15,7 +15,6 @@ value.  Two interpolations are offered:
 
 from __future__ import annotations
 
-import numpy as np
 
 from .ply import write_ply
 from .render import render_scene
