@@ -419,6 +419,14 @@ def _check_options(kw: dict, fn, given=()) -> None:
         raise InputError(f"to_html() got an unknown option {unknown[0]!r} (its options: {', '.join(known) or 'none'})")
 
 
+def _own_options(fn) -> tuple:
+    """The keyword options a result's page builder takes itself before passing the rest on."""
+    import inspect
+
+    return tuple(p.name for p in inspect.signature(fn).parameters.values()
+                 if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is not p.empty)
+
+
 #: For each result type: the page function whose options ``to_html`` takes, and those it sets itself.
 _PAGE_OPTIONS = {"ScoreResult": ("score_page", ()), "HeatMapResult": ("heatmap_page", ("landmarks", "lines")),
                  "LandmarkResult": ("landmarks_page", ()), "MatchResult": ("match_page", ("fields",)),
@@ -430,8 +438,8 @@ def result_page(result, **kw) -> str:
     kind = type(result).__name__
     if kind in _PAGE_OPTIONS:
         name, given = _PAGE_OPTIONS[kind]
-        _check_options({k: v for k, v in kw.items() if not (kind == "MatchResult" and k == "truth")},
-                       globals()[name], given)
+        own = _own_options(_match_result_page) if kind == "MatchResult" else ()  # truth, suggestions, ...
+        _check_options({k: v for k, v in kw.items() if k not in own}, globals()[name], given)
     if kind == "ScoreResult":
         return score_page(result, **kw)
     if kind == "HeatMapResult":
