@@ -122,6 +122,7 @@ def test_the_error_bar_is_in_the_summary_and_its_doubt_field_in_a_ply(files, cap
     assert bar["epsilon_source"] in ("the map's own distortion", "the landmarks' own distortion")
     assert bar["bar"] >= bar["resolution"] > 0 and bar["unit"] == "sqrt(area)"
     assert f"{bar['bar']:.3g}" in bar["text"]
+    assert "--points 80" in (d / "match.html").read_text()   # the page's command repeats the run's options
     import trimesh
     ply = trimesh.load(d / "doubt.ply", process=False)
     assert len(ply.vertices) == len(V)

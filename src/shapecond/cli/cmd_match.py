@@ -89,6 +89,7 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     t0 = time.perf_counter()
     lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
     ids_s, ids_t = parse_ids(landmarks_source, "--landmarks-source"), parse_ids(landmarks_target, "--landmarks-target")
+    truth_text = o["truth"]
     shapes = _surfaces_up_front(source, target, o)
     result = match(*shapes, ids_s, ids_t, matcher=o["matcher"], n_points=o["points"],
                    seed=o["seed"], backend=o["geodesic_backend"], dense=o["dense"], samples=o["samples"],
@@ -102,7 +103,8 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     if o["doubt_png"]:
         info(f"wrote {result.plot(path=o['doubt_png'])}")
     if o["html"]:
-        paths = dict(source=source, target=target, output=output, html=o["html"])  # for the page's command
+        paths = dict(source=source, target=target, output=output, html=o["html"],  # for the page's command
+                     options=_repeated_options(o, truth_text))
         info(f"wrote {result.to_html(o['html'], truth=o['truth'], command=paths)}")
     summary = dict(result.summary, source=str(source), target=str(target), output=str(out),
                    seconds=time.perf_counter() - t0)
@@ -116,6 +118,17 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
         for i, s in enumerate(summary.get("suggestions", []), 1):
             info(f"next landmark {i}: source {s['source_id']} (provisional image {s['image_id']}), "
                  f"bar after it {s['bar_after']:.3g} sqrt(area)")
+
+
+def _repeated_options(o: dict, truth_text) -> list:
+    """The options of this run that the page's command repeats (those that change the map or the page)."""
+    words = []
+    for name, flag, default in (("matcher", "--matcher", "lh05"), ("points", "--points", 400),
+                                ("dense", "--dense", "zoomout"), ("samples", "--samples", "fps"),
+                                ("suggest", "--suggest", 0), ("seed", "--seed", 0)):
+        if o.get(name) != default:
+            words += [flag, o[name]]
+    return words + (["--truth", truth_text] if truth_text is not None else [])
 
 
 def _surfaces_up_front(source, target, o: dict) -> tuple:

@@ -239,14 +239,16 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
 
 
 #: The words of the command a match page builds, and what it shows for those it was not given.
-COMMAND_WORDS = (("source", "SOURCE"), ("target", "TARGET"), ("output", "MAP.txt"), ("html", "PAGE.html"))
+COMMAND_WORDS = (("source", "SOURCE"), ("target", "TARGET"), ("output", "MAP.txt"), ("html", "PAGE.html"),
+                 ("options", ""))
 
 
 def match_picking(src, tgt, landmarks_source, landmarks_target, command=None) -> dict:
     """What a match page needs to build ``shapecond match`` commands from landmarks picked by clicking.
 
     ``command``: the paths as given on the command line (keys ``source``, ``target``,
-    ``output``, ``html``; a missing one is shown as a placeholder), shell-quoted here;
+    ``output``, ``html``; a missing one is shown as a placeholder), shell-quoted here, and
+    ``options``: the other options of the run, as a list of words (``--matcher faq``...), repeated;
     ``pairs``: the landmark pairs so far as file vertex ids.
     """
     import shlex
@@ -256,9 +258,11 @@ def match_picking(src, tgt, landmarks_source, landmarks_target, command=None) ->
     if unknown:
         raise InputError(f"unknown command word(s) {', '.join(sorted(unknown))}; "
                          f"known: {', '.join(k for k, _ in COMMAND_WORDS)}")
+    options = " ".join(shlex.quote(str(w)) for w in given.pop("options", None) or ())
     words = {k: shlex.quote(str(given[k])) if given.get(k) is not None else shown for k, shown in COMMAND_WORDS}
+    words["options"] = options
     pairs = [[int(src.ids[int(a)]), int(tgt.ids[int(b)])] for a, b in zip(landmarks_source, landmarks_target)]
-    return dict(words, pairs=pairs, placeholders=[k for k, _ in COMMAND_WORDS if given.get(k) is None])
+    return dict(words, pairs=pairs, placeholders=[k for k, _ in COMMAND_WORDS[:4] if given.get(k) is None])
 
 
 def _suggestions(src, suggestions) -> tuple:

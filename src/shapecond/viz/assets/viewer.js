@@ -390,7 +390,7 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       const [s, t] = this.ids(), p = this.p;
       if (!s.length) return "(no landmark pair yet)";
       return `shapecond match ${p.source} ${p.target} --landmarks-source ${s.join(",")} ` +
-        `--landmarks-target ${t.join(",")} -o ${p.output} --html ${p.html}`;
+        `--landmarks-target ${t.join(",")} -o ${p.output} --html ${p.html}` + (p.options ? ` ${p.options}` : "");
     }
 
     click(i) {
