@@ -399,7 +399,7 @@ def test_browser_match_page_picks_landmarks(browser, tmp_path, pair_result):
     page.locator(".sc-suggestion").click()  # a suggestion picks its source vertex
     assert "now click its target" in page.locator(".sc-pick-state").inner_text()
     assert page.evaluate(f"{viewer}.extra.length") == 1 + 2 + 1  # the suggestion, one pair, the pending pick
-    page.locator("button.sc-copy").click()
-    assert "copied" in page.locator(".sc-pick-state").inner_text() or "selected" in page.locator(
-        ".sc-pick-state").inner_text()
+    page.locator("button.sc-copy").click()  # the clipboard answers asynchronously: wait for the page's word
+    page.wait_for_function("/copied|selected/.test(document.querySelector('.sc-pick-state').innerText)",
+                           timeout=10_000)
     assert not errors, errors
