@@ -91,6 +91,9 @@ def _counts(text) -> list[int]:
 @click.option("--landmark-count", type=Int(1, 10_000), default=None,
               help="Landmarks per source, the largest count matched [default: the paper's count for its TOSCA "
                    "classes, 10 otherwise].")
+@click.option("--scores/--no-scores", default=True, show_default=True,
+              help="Score every landmark set (σ and δ after 1, 3 and all landmarks, δ at each class's levels); "
+                   "--no-scores: the matchings alone, for a release's pairs list (a landmark set per source).")
 @click.option("--error-bars/--no-error-bars", default=True, show_default=True,
               help="Give every matching its error bar (from δ(ε̂)) read off the map itself (one δ search each) and "
                    "report how the bars hold the true errors.")
@@ -110,7 +113,7 @@ def command(dataset_dir, **o):
                       n_points=o["points"], seed=o["seed"], backend=o["geodesic_backend"], cache=not o["no_cache"],
                       progress=progress_enabled(), max_targets=o["max_targets"], protocol=o["protocol"],
                       force=o["force"], error_bars=o["error_bars"], pairs=o["pairs_file"],
-                      n_landmarks=o["landmark_count"])
+                      n_landmarks=o["landmark_count"], scores=o["scores"])
     report = write_report(ev, o["out_dir"])
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),

@@ -93,7 +93,7 @@ def _scores(shape, idx, seed) -> dict:
 
 
 def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, quick: bool = False,
-                  epsilon: float | None = None) -> dict:
+                  epsilon: float | None = None, scores: bool = True) -> dict:
     """Landmarks of one method on the null shape and the scores after 1, 3 and k of them.
 
     Scores: the quick witness search's σ for every method alike, so that Figure 7a
@@ -101,7 +101,9 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
     starts and would not be comparable with the baselines'); ``floor``: the best
     single swap with the same landmarks, to show when a score is only that;
     ``scale``: δ(ε) at the default ε (``symmetry.scale``), non-increasing in the count.
-    ``epsilon``: the class's level, for the methods of ``AT_CLASS_LEVEL``.
+    ``epsilon``: the class's level, for the methods of ``AT_CLASS_LEVEL``.  ``scores=False`` leaves the
+    scores out (empty tables): a pairs list makes one landmark set per source, where they cost more than
+    the matchings.
     """
     import warnings
 
@@ -111,7 +113,7 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
     st = Path(null_path).stat()
     key = disk.key_of(LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size, st.st_mtime_ns,
                       method, k, setup.n_points, setup.seed, setup.backend, quick,
-                      *([epsilon] if method in AT_CLASS_LEVEL else []))
+                      *([epsilon] if method in AT_CLASS_LEVEL else []), *([] if scores else ["no scores"]))
     d = disk.load_json("landmarks", key, _check_entry) if setup.cache else None
     if d is not None:
         for name in ("scores", "floor", "scale"):
@@ -126,7 +128,8 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
                                          **level).sample_indices][:k]
     seconds = time.perf_counter() - t0
     out = dict(cls=cls, method=method, vertices=[int(shape.samples[i]) for i in idx],
-               ids=[int(v) for v in shape.sample_ids[idx]], **_scores(shape, idx, setup.seed),
+               ids=[int(v) for v in shape.sample_ids[idx]],
+               **(_scores(shape, idx, setup.seed) if scores else dict(scores={}, floor={}, scale={})),
                seconds=seconds, score_source="search")
     if setup.cache:
         disk.save_json("landmarks", key, {**out, "scores": {c: _json_float(v) for c, v in out["scores"].items()},

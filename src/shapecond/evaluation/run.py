@@ -62,6 +62,8 @@ class EvaluationOptions:
         null shape to the rest of its class).  Each source is then a group of its own.
     n_landmarks : landmarks per source, the largest count matched (None: the paper's count for its
         TOSCA classes, ``DEFAULT_LANDMARKS`` otherwise).
+    scores : the symmetry scores of every landmark set (Figure 7a: σ and δ after 1, 3 and all
+        landmarks, δ at the class's levels); False: the matchings alone (a release's pairs list).
     """
 
     classes: tuple | None = None
@@ -83,6 +85,7 @@ class EvaluationOptions:
     error_bars: bool = True
     pairs: tuple | None = None
     n_landmarks: int | None = None
+    scores: bool = True
 
     def __post_init__(self):
         from ..matching.pipeline import DENSE_STAGES, MATCHERS
@@ -217,7 +220,7 @@ def _landmark_phase(plan: dict, opts: EvaluationOptions) -> list:
                                                          {}) for p in plan.values()], opts)}
     by_cost = sorted(opts.methods, key=lambda m: -LANDMARK_COST.get(m, 0))
     tasks = [(landmark_task, (p.name, p.folder.null, m, p.k, setup, opts.quick),
-              dict(epsilon=levels[p.name]) if m in AT_CLASS_LEVEL else {})
+              dict(scores=opts.scores, **(dict(epsilon=levels[p.name]) if m in AT_CLASS_LEVEL else {})))
              for m in by_cost for p in plan.values()]
     tasks += [(prepare_task, (t, setup), dict(null_path=p.folder.null, protocols=p.protocols))
               for p in plan.values() for t in p.targets]
@@ -232,7 +235,7 @@ def _matching_phase(plan: dict, landmarks: list, opts: EvaluationOptions):
     tasks = []
     for p in plan.values():
         done = [d for d in landmarks if d["cls"] == p.name]
-        if "corresponding" in p.protocols:  # the level is read from a shared vertex order
+        if "corresponding" in p.protocols and opts.scores:  # the level is read from a shared vertex order
             sets = {d["method"]: (d["vertices"], sorted(d["scale"])) for d in done}
             tasks.append((class_scale_task, (p.name, p.folder.null, p.targets, sets, setup), {}))
         sets = {d["method"]: d["vertices"] for d in done}
@@ -276,7 +279,7 @@ def evaluate_dataset(dataset_dir, options: EvaluationOptions | None = None, **kw
     records, eps = _matching_phase(plan, landmarks, opts)
     timing["matching"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    eps_hat = _hat_phase(plan, landmarks, records, opts)
+    eps_hat = _hat_phase(plan, landmarks, records, opts) if opts.scores else {}
     if eps_hat:
         timing["delta at the matched level"] = time.perf_counter() - t0
     return Evaluation(landmarks, records, _settings(dataset_dir, plan, opts, eps, eps_hat), timing)
