@@ -13,6 +13,13 @@ The paper matches samples only; the dense stage is what makes the map usable
 between differently meshed shapes: on independently remeshed TOSCA pairs it
 takes LH05's extended maps from 0.03–0.13 sqrt(area) to 0.01–0.03.
 
+Off isometry (two bodies, two species) distances alone leave a map and its composition with a
+reflection that keeps the landmarks apart by nothing: every stage also reads on which side of each
+pair of landmarks a point lies (``orientation``): the sample matchers' descriptors (``sample_sides``;
+the nested runs with the first 3 landmarks keep the sides of every pair, a start, not a constraint),
+the zoomout matcher's start and the dense stage's anchors (SMAL_r, cow to 8 other species, 6
+landmarks: FAQ 0.060 → 0.040 sqrt(area), LH05 0.093 → 0.048, zoomout 0.096 → 0.050).
+
 The third matcher, ``"zoomout"``, needs no samples: each vertex is described by
 its geodesic distances to the landmarks, the initial map sends every source
 vertex to the target vertex with the nearest description, and the dense stage
