@@ -97,7 +97,7 @@ def deformation_level(x, others, *, landmarks=(), landmarks_others=None, matcher
     True
     """
     t0 = time.perf_counter()
-    refused = [k for k in ("error_bar", "dense", "samples") if k in options]  # match's, meaningless here
+    refused = [k for k in ("error_bar", "dense", "samples", "suggest") if k in options]  # match's, meaningless here
     if refused:
         raise InputError(f"deformation_level() got unknown option {refused[0]!r}")
     if matcher == "zoomout":

@@ -22,7 +22,7 @@ from .results import MatchResult
 
 #: Keywords of ``match`` besides the matcher's own options.
 _SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "largest_component": False,
-             "error_bar": True}
+             "error_bar": True, "suggest": 0}
 
 
 def _matcher_options(matcher: str, options: dict) -> dict:
@@ -46,6 +46,9 @@ def _match_options(matcher, n_points, dense, samples, options: dict):
                         cache=check_flag(settings["cache"], "cache"),
                         matcher_options=_matcher_options(matcher, options))
     flags = {k: check_flag(settings[k], k) for k in ("largest_component", "force", "error_bar")}
+    flags["suggest"] = check_int(settings["suggest"], "suggest", lo=0)
+    if flags["suggest"] and not flags["error_bar"]:
+        raise InputError("suggesting landmarks reads the error bar: it needs error_bar=True")
     return opts, flags
 
 
@@ -70,8 +73,7 @@ def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
 
 
 def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
-          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", samples: str = "fps", suggest: int = 0,
-          **options) -> MatchResult:
+          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", samples: str = "fps", **options) -> MatchResult:
     """Match ``source`` to ``target`` with corresponding landmarks fixed (input ids, same order).
 
     Parameters
@@ -89,11 +91,10 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     **options : ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``,
         ``error_bar`` (default True: also estimate the map's error without ground truth,
         ``matching.error_bar``: the mean displacement of δ(ε̂)'s witness on the source, ε̂ the
-        map's own distortion) and the sample matcher's own options (lh05: ``k``, ``rounding``,
+        map's own distortion), ``suggest`` (how many next landmarks to suggest, ``matching.suggest``; needs
+        the error bar; in the summary as ``"suggestions"``, and ``.suggest(k)`` later) and the sample
+        matcher's own options (lh05: ``k``, ``rounding``,
         ``refine``...).
-    suggest : how many next landmarks to suggest (``matching.suggest``; needs the error bar), added to
-        the summary as ``"suggestions"``; ``.suggest(k)`` gives them later too.
-
     Returns
     -------
     MatchResult: ``.map[i]`` the target id of source id i (-1: a vertex dropped on loading),
@@ -108,9 +109,6 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     True
     """
     opts, flags = _match_options(matcher, n_points, dense, samples, dict(options))
-    suggest = check_int(suggest, "suggest", lo=0)
-    if suggest and not flags["error_bar"]:
-        raise InputError("suggesting landmarks reads the error bar: it needs error_bar=True")
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     src, tgt = _inputs(source, target, ids_s, ids_t, flags)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
@@ -132,8 +130,8 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
         doubt[src.ids] = bar.doubt[coarse.nearest]
         advice = partial(suggest_landmarks, coarse, Dt, bar, len(ids_s), m.vertex_map, tgt.ids, seed=opts.seed)
     result = MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)), doubt, advice)
-    if suggest:
-        result.suggest(suggest)  # recorded in the summary
+    if flags["suggest"]:
+        result.suggest(flags["suggest"])  # recorded in the summary
     return result
 
 
