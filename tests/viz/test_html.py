@@ -18,6 +18,7 @@ from shapecond.errors import InputError
 from shapecond.shapes.synthetic import generate
 from shapecond.viz import html as H
 from shapecond.viz import pages
+from shapecond.viz import truth as viz_truth
 from shapecond.viz.render import view_rotation
 from shapecond.viz.scene import heatmap_scene, make_scene
 
@@ -118,7 +119,7 @@ def test_bad_inputs_are_input_errors(tmp_path):
         res.to_html(tmp_path / "x.html")
     assert res._repr_html_() is None and not (tmp_path / "x.html").exists()
     with pytest.raises(InputError):
-        pages.read_truth(str(tmp_path / "missing.txt"))
+        viz_truth.read_truth(str(tmp_path / "missing.txt"))
 
 
 def test_cli_html_options(tmp_path, capsys):

@@ -9,6 +9,7 @@ from shapecond.errors import InputError
 from shapecond.shapes.io import load_geometry, write_mesh
 from shapecond.shapes.synthetic import sphere
 from shapecond.viz import pages
+from shapecond.viz import truth as viz_truth
 from tests.helpers import deadline, run_cli
 
 
@@ -43,10 +44,10 @@ def test_a_map_file_is_read_strictly(tmp_path):
     for name, text in cases.items():
         (tmp_path / name).write_text(text)
         with pytest.raises(InputError) as exc:
-            pages.read_truth(str(tmp_path / name))
+            viz_truth.read_truth(str(tmp_path / name))
         assert "\n" not in str(exc.value), name
     (tmp_path / "ok").write_text("3\n-1\n# a comment\n0  # trailing\n")
-    assert pages.read_truth(str(tmp_path / "ok")).tolist() == [3, -1, 0]
+    assert viz_truth.read_truth(str(tmp_path / "ok")).tolist() == [3, -1, 0]
 
 
 @pytest.mark.parametrize("special", ["fifo", "/dev/zero"])
@@ -57,15 +58,15 @@ def test_a_fifo_or_a_device_is_refused_without_reading(tmp_path, special):
         path = str(tmp_path / "fifo")
         os.mkfifo(path)
     with deadline(10), pytest.raises(InputError, match="not a regular file"):
-        pages.read_truth(path)
+        viz_truth.read_truth(path)
 
 
 def test_reference_truth_is_known_at_the_reference_vertices_only(pair):
     d, inv, ref = pair
     src, tgt = load_geometry(d / "a.off"), load_geometry(d / "b.off")
-    truth = pages.read_truth(f"{d / 'a.vts'},{d / 'b.vts'}")
-    t = pages.truth_map(truth, src, tgt)
-    full = pages.truth_map(pages.read_truth(str(d / "truth.txt")), src, tgt)
+    truth = viz_truth.read_truth(f"{d / 'a.vts'},{d / 'b.vts'}")
+    t = viz_truth.truth_map(truth, src, tgt)
+    full = viz_truth.truth_map(viz_truth.read_truth(str(d / "truth.txt")), src, tgt)
     assert np.array_equal(np.flatnonzero(t >= 0), ref) and np.array_equal(t[ref], full[ref])
     wrong = np.where(np.arange(len(inv)) % 2 == 0, full, np.roll(full, 5))
     _, err, samples = pages.match_errors(src, tgt, wrong, t)
@@ -79,12 +80,12 @@ def test_reference_truth_out_of_range_or_unequal_is_refused(pair, tmp_path):
     src, tgt = load_geometry(d / "a.off"), load_geometry(d / "b.off")
     (tmp_path / "short.vts").write_text("1\n2\n")
     with pytest.raises(InputError, match="reference points"):
-        pages.read_truth(f"{d / 'a.vts'},{tmp_path / 'short.vts'}")
+        viz_truth.read_truth(f"{d / 'a.vts'},{tmp_path / 'short.vts'}")
     (tmp_path / "big.vts").write_text("".join(f"{500 + k}\n" for k in range(len(ref))))
     with pytest.raises(InputError, match="out of range"):
-        pages.truth_map(pages.read_truth(f"{d / 'a.vts'},{tmp_path / 'big.vts'}"), src, tgt)
+        viz_truth.truth_map(viz_truth.read_truth(f"{d / 'a.vts'},{tmp_path / 'big.vts'}"), src, tgt)
     with pytest.raises(InputError, match="only -1"):
-        pages.truth_map(np.where(inv == 3, -5, inv), src, tgt)
+        viz_truth.truth_map(np.where(inv == 3, -5, inv), src, tgt)
 
 
 @pytest.mark.parametrize("bad", ["minus_five", "out_of_range", "fifo"])

@@ -255,7 +255,7 @@ class MatchResult(Pictures):
 
         ``truth``: one target id per source id (-1: none), "same-ids", the path of such a map file, or
         ``"SOURCE.vts,TARGET.vts"``, the two shapes' reference files of a remeshed release (the error is
-        then measured at the source's reference vertices); see ``viz.pages.truth_map``."""
+        then measured at the source's reference vertices); see ``viz.truth.truth_map``."""
         return super().to_html(path, truth=truth, **kw)
 
     def plot(self, fig=None, path=None, **kw):

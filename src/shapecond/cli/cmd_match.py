@@ -139,7 +139,7 @@ def _surfaces_up_front(source, target, o: dict) -> tuple:
     if not drawn:
         return source, target
     from ..api import load
-    from ..viz.pages import read_truth, truth_map
+    from ..viz.truth import read_truth, truth_map
 
     truth = read_truth(o["truth"])
     shapes = tuple(load(x, largest_component=o["largest_component"], force=o["force"]) for x in (source, target))
