@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections import defaultdict
+from types import SimpleNamespace
 from pathlib import Path
 
 import numpy as np
@@ -35,27 +37,23 @@ def _records(path: Path) -> tuple[dict, list]:
     return d["settings"], [r for r in d["records"] if r["protocol"] in ("remeshed", "corresponding")]
 
 
+def _number(v) -> float:
+    return math.inf if v == "inf" else math.nan if v is None else float(v)
+
+
 def _err(r) -> float:
-    """The field's unit where there is one (sqrt(area)); the corresponding protocol's samples also have it."""
-    v = r["error_area"]
-    return float(v) if v not in (None, "inf") and np.isfinite(float(v)) else float("nan")
+    return _number(r["error_area"])
 
 
 def pooled(records) -> dict:
-    acc = defaultdict(list)
-    for r in records:
-        acc[(r["method"], r["n_landmarks"], r["matcher"])].append(r)
-    out = {}
-    for k, rs in sorted(acc.items()):
-        e = np.array([_err(r) for r in rs])
-        bars = np.array([r["bar"] if r["bar"] is not None else np.nan for r in rs], dtype=float)
-        flips = [r["flipped"] for r in rs if r.get("flipped") is not None]
-        held = (e <= bars)[np.isfinite(bars)]
-        out[k] = dict(n=len(rs), mean=1e3 * np.nanmean(e), median=1e3 * np.nanmedian(e), worst=1e3 * np.nanmax(e),
-                      failed=int(np.sum(e > 0.05)), flipped=int(np.nansum(flips)) if flips else None,
-                      held=float(np.mean(held)) if held.size else float("nan"),
-                      failed_held=(int(np.sum((e > 0.05) & (e <= bars))), int(np.sum((e > 0.05) & np.isfinite(bars)))))
-    return out
+    """``evaluation.report.pooled`` of a results.json's records, errors in 10⁻³ sqrt(area)."""
+    from shapecond.evaluation.report import pooled as report_pooled
+
+    rows = [SimpleNamespace(**{k: _number(r[k]) if k in ("error_area", "bar", "flipped") else r[k] for k in
+                               ("method", "n_landmarks", "matcher", "error_area", "bar", "flipped")})
+            for r in records]
+    return {k: dict(d, mean=1e3 * d["mean"], median=1e3 * d["median"], worst=1e3 * d["worst"])
+            for k, d in sorted(report_pooled(rows).items())}
 
 
 def checks(records) -> list[str]:

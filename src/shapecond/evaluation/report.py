@@ -178,8 +178,8 @@ def _score_rows(st, table, floors=None) -> list[str]:
 
 def pooled(records) -> dict:
     """{(method, n_landmarks, matcher): summary over every matching} in units of sqrt(area): mean,
-    median and worst error, matchings, failed (error > ``FAILED``), flipped, and the share held by its
-    error bar (NaN without bars)."""
+    median and worst error, matchings, failed (error > ``FAILED``), flipped, the share held by its
+    error bar (NaN without bars) and the failed matchings with a bar, and held, as (held, of)."""
     acc = defaultdict(list)
     for r in records:
         acc[(r.method, r.n_landmarks, r.matcher)].append(r)
@@ -188,9 +188,11 @@ def pooled(records) -> dict:
         e = np.array([r.error_area for r in rs])
         flips = [r.flipped for r in rs if np.isfinite(r.flipped)]
         held = [r.error_area <= r.bar for r in rs if np.isfinite(r.bar)]
+        failed_held = [r.error_area <= r.bar for r in rs if np.isfinite(r.bar) and r.error_area > FAILED]
         out[k] = dict(n=len(rs), mean=float(np.mean(e)), median=float(np.median(e)), worst=float(np.max(e)),
                       failed=int(np.sum(e > FAILED)), flipped=int(np.sum(flips)) if flips else None,
-                      held=float(np.mean(held)) if held else math.nan)
+                      held=float(np.mean(held)) if held else math.nan,
+                      failed_held=(int(np.sum(failed_held)), len(failed_held)))
     return out
 
 
@@ -200,13 +202,13 @@ def _pooled_section(ev) -> list[str]:
     out = ["", "## All matchings pooled, remeshed protocol (geodesic error / sqrt(area))", "",
            f"Mean, median and worst over the matchings; failed: error > {FAILED}; flipped: mean error over half "
            "the mean mirror distance (where the ground truth has mirror images); held: the share of matchings "
-           "whose error bar is at least the error.", "",
-           "| method | L | matcher | matchings | mean | median | worst | failed | flipped | held |",
-           "|---|---|---|---|---|---|---|---|---|---|"]
+           "whose error bar is at least the error (and of the failed ones).", "",
+           "| method | L | matcher | matchings | mean | median | worst | failed | flipped | held | failed held |",
+           "|---|---|---|---|---|---|---|---|---|---|---|"]
     for (m, c, matcher), d in sorted(table.items()):
         out.append(f"| {m} | {c} | {matcher} | {d['n']} | {_fmt(d['mean'], 4)} | {_fmt(d['median'], 4)} | "
                    f"{_fmt(d['worst'], 4)} | {d['failed']} | {'-' if d['flipped'] is None else d['flipped']} | "
-                   f"{_fmt(d['held'])} |")
+                   f"{_fmt(d['held'])} | {d['failed_held'][0]} of {d['failed_held'][1]} |")
     return out
 
 
