@@ -50,6 +50,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from shapecond.errors import InputError
+from shapecond.matching.orientation import orientation_features
 from shapecond.shapes.laplace import LaplaceBasis
 
 #: Source rows per block of the nearest-neighbour products.
@@ -119,8 +120,6 @@ class Anchors:
     def oriented(self, source_geometry, target_geometry) -> "Anchors":
         """The same anchors with the sides of every landmark pair on both meshes
         (``orientation.orientation_features``; unchanged for point clouds)."""
-        from shapecond.matching.orientation import orientation_features
-
         fs = orientation_features(source_geometry, self.source_rows)
         ft = orientation_features(target_geometry, self.target_rows)
         if fs is None or ft is None:
