@@ -54,7 +54,7 @@ from shapecond.matching.sampled import (CachedSolver, SampledSurface, carry_samp
                                         sample_surface, surface_unit)
 from shapecond.matching.seeded import faq_match
 from shapecond.matching.spectral import SampleMatch, lh05_match
-from shapecond.matching.zoomout import Anchors, ZoomOutOptions, nearest_rows, zoomout
+from shapecond.matching.zoomout import Anchors, ZoomOutOptions, anchor_width, nearest_rows, zoomout
 from shapecond.shapes.laplace import laplace_basis
 
 #: Matchers: two on samples (then extended and refined), one from the landmarks alone.
@@ -148,7 +148,8 @@ def dense_stage(source_geometry, target_geometry, initial, anchors: Anchors | No
     bs = laplace_basis(source_geometry, cache=options.cache)
     bt = laplace_basis(target_geometry, cache=options.cache)
     if anchors is not None:
-        anchors = anchors.oriented(source_geometry, target_geometry)
+        anchors = anchors.oriented(source_geometry, target_geometry).harmonic(
+            source_geometry, target_geometry, anchor_width(bs, bt, options.zoomout))
     return zoomout(bs, bt, source_geometry.vertices, initial, anchors, options.zoomout)
 
 

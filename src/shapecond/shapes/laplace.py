@@ -69,7 +69,10 @@ class LaplaceBasis:
         return f"LaplaceBasis(n={self.n_vertices}, k={self.k}, λ_1={self.evals[min(1, self.k - 1)]:.4g})"
 
 
-def _operators(geometry: Geometry) -> tuple[sp.csc_matrix, np.ndarray]:
+def operators(geometry: Geometry) -> tuple[sp.csc_matrix, np.ndarray]:
+    """The stiffness ``L`` (cotangent weights, scale-free) and the lumped mass of the area-1 shape
+    (module docstring): the operators the basis is computed from, and the landmarks' harmonic
+    coordinates (``matching.harmonic``) solved with."""
     import robust_laplacian
 
     V = np.asarray(geometry.vertices, dtype=np.float64)
@@ -134,7 +137,7 @@ def laplace_basis(geometry: Geometry, k: int = DEFAULT_EIGENPAIRS, cache: bool =
         z = disk.load_arrays("laplace", key, {"evals": (k,), "evecs": (n, k), "mass": (n,)}, _check_entry)
         if z is not None:
             return LaplaceBasis(z["evals"], z["evecs"], z["mass"])
-    L, mass = _operators(geometry)
+    L, mass = operators(geometry)
     try:
         evals, evecs = _eigenpairs(L, mass, k)
     except (RuntimeError, ValueError) as exc:  # ARPACK's failures on a degenerate operator
