@@ -24,19 +24,23 @@ vertices, ``.vts`` ground truth), are what make it a landmark-guided stage:
   isometric than the spectra can tell.  Each landmark pair contributes one
   more coordinate to both embeddings, the Gaussian ``g(x) = exp(−d(x, l)² /
   2σ²) / (σ√π)`` of the geodesic distance to the landmark (``d`` in units of
-  ``sqrt(area)``), which has unit ``L²`` norm on a flat area-1 surface and so
-  weighs like one basis function.  ``σ = π / sqrt(λ_k)`` is the half-wavelength
+  ``sqrt(area)``), which has unit ``L²`` norm on a flat area-1 surface, like one
+  basis function (its weight: below).  ``σ = π / sqrt(λ_k)`` is the half-wavelength
   of the last basis function: the anchors act at the scale the basis no longer
   resolves and leave long distances, which real poses change by 5–20 %, out.
   (dog0 → dog1 with 6 landmarks: 0.052 → 0.022; no pair got worse by more than
   2 %.)  The landmark vertices themselves are mapped exactly.
 * **Harmonic coordinates of the landmarks** (``harmonic``), which two bodies or two species keep
-  where they change geodesic distances, are a further block of both embeddings.  Its weight is
-  measured, not set: at every level the spectral and the harmonic residuals of the current map
-  (``Φ_s[x] − Φ_t Cᵀ[T x]`` and ``h_s(x) − h_t(T x)``) are whitened to the same variance per
-  coordinate — the weighting under which nearest neighbours are the most likely match if both
-  residuals were Gaussian.  (SMAL_r, cow to 8 other species, 6 landmarks, FAQ start: 0.040 →
-  0.037 sqrt(area); TOSCA_r pairs within ±1 ×10⁻³.)
+  where they change geodesic distances, are a further block of both embeddings.
+* **Block weights measured, not set.**  At every level each block's residual under the current map
+  (``Φ_s[x] − Φ_t Cᵀ[T x]`` for the spectra, ``a_s(x) − a_t(T x)`` for a block ``a``) is whitened to
+  the spectral residual's variance per coordinate — the weighting under which the nearest neighbour
+  is the most likely match if the residuals were Gaussian.  The blocks: the anchors (the Gaussians
+  with the sides of the landmark pairs, ``Anchors.blocks``) and the harmonic coordinates.  Measured
+  on the SMAL_r training split (the cow matched to its 31 other animals, 6 farthest-point landmarks,
+  FAQ start; ``benchmarks/RESULTS.md``): mean error 0.040 → 0.033 sqrt(area) against the fixed
+  weights without harmonic coordinates; three blocks (the sides on their own) 0.035.  Started from
+  the *true* map the stage ended at 0.042 before, at 0.034 with the harmonic block alone.
 * **Source subsample.**  Step 2 runs on ``10 k_end`` farthest source points
   (Euclidean farthest-point sampling, Voronoi masses for step 1) against every
   target vertex, as the accelerated ZoomOut of the paper does; only the final
@@ -114,9 +118,12 @@ class Anchors:
     source_harmonic: np.ndarray | None = None
     target_harmonic: np.ndarray | None = None
 
-    def features(self, sigma: float) -> tuple[np.ndarray, np.ndarray]:
-        """Gaussian anchor coordinates ``(n_s, L)`` and ``(n_t, L)`` (module docstring), followed by the
-        sides of the landmark pairs when known (``oriented``)."""
+    def blocks(self, sigma: float) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The anchor blocks ``(source (n_s, d), target (n_t, d))`` of both embeddings (module
+        docstring): the Gaussian anchor coordinates with the sides of the landmark pairs where known
+        (``oriented``) — two readings of the same distance rows, their values and their gradients,
+        whose relative weight their construction fixes — then the harmonic coordinates where known
+        (``harmonic``), another operator's reading and so a block of its own."""
         scale = 1.0 / (sigma * math.sqrt(math.pi))
 
         def g(rows):
@@ -125,7 +132,10 @@ class Anchors:
         fs, ft = g(self.source_rows), g(self.target_rows)
         if self.source_sides is not None and self.target_sides is not None:
             fs, ft = np.hstack([fs, self.source_sides]), np.hstack([ft, self.target_sides])
-        return fs, ft
+        out = [(fs, ft)]
+        if self.source_harmonic is not None and self.target_harmonic is not None:
+            out.append((self.source_harmonic, self.target_harmonic))
+        return out
 
     def oriented(self, source_geometry, target_geometry) -> "Anchors":
         """The same anchors with the sides of every landmark pair on both meshes
@@ -214,8 +224,7 @@ def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarra
         raise InputError("the initial map does not fit the two shapes")
     levels = options.levels(min(source.k, target.k))
     k_end = levels[-1]
-    fs, ft = anchors.features(anchor_width(source, target, options)) if anchors is not None else (None, None)
-    hs, ht = (anchors.source_harmonic, anchors.target_harmonic) if anchors is not None else (None, None)
+    blocks = anchors.blocks(anchor_width(source, target, options)) if anchors is not None else []
     points = np.asarray(source_points, dtype=np.float64)
     S = farthest_points(points, options.subsample_factor * k_end)
     _, cell = cKDTree(points[S]).query(points)
@@ -227,40 +236,33 @@ def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarra
     for k in levels:
         C = functional_map(phi_s[:, :k], w, phi_t[TS, :k], gram)
         Y = phi_t[:, :k] @ C.T
-        c = _harmonic_weight(phi_s[:, :k], Y, TS, w, hs, ht, S)
-        TS = _pointwise(phi_s[:, :k], Y, *_blocks(fs, ft, hs, ht, c, S))
+        scales = _whitening(phi_s[:, :k], Y, TS, w, blocks, S)
+        TS = _pointwise(phi_s[:, :k], Y, [(a[S], b) for a, b in blocks], scales)
     C = functional_map(phi_s, w, phi_t[TS], gram)
     Y = phi_t @ C.T
-    c = _harmonic_weight(phi_s, Y, TS, w, hs, ht, S)
-    T = _pointwise(source.evecs[:, :k_end], Y, *_blocks(fs, ft, hs, ht, c))
+    T = _pointwise(source.evecs[:, :k_end], Y, blocks, _whitening(phi_s, Y, TS, w, blocks, S))
     if anchors is not None:
         T[anchors.source] = anchors.target
     return T
 
 
-def _harmonic_weight(X, Y, TS, w, hs, ht, S) -> float:
-    """Scale of the harmonic block that whitens it against the spectral one (module docstring):
+def _whitening(X, Y, TS, w, blocks, S) -> list[float]:
+    """Scale of every anchor block that whitens it against the spectral block (module docstring):
     the ratio of their residual RMS per coordinate under the current map ``S → TS`` (mass ``w``)."""
-    if hs is None:
-        return 0.0
     spectral = float(w @ np.square(X - Y[TS]).sum(axis=1)) / X.shape[1]
-    harmonic = float(w @ np.square(hs[S] - ht[TS], dtype=np.float64).sum(axis=1)) / hs.shape[1]
-    return math.sqrt(spectral / harmonic) if harmonic > 0 else 0.0
+    scales = []
+    for a, b in blocks:
+        residual = float(w @ np.square(a[S] - b[TS], dtype=np.float64).sum(axis=1)) / a.shape[1]
+        scales.append(math.sqrt(spectral / residual) if residual > 0 else 0.0)
+    return scales
 
 
-def _blocks(fs, ft, hs, ht, c: float, S=None):
-    """The anchor blocks of the source (rows ``S``, all when None) and the target, with the harmonic
-    block at scale ``c`` when there is one."""
-    if fs is not None and S is not None:
-        fs = fs[S]
-    if hs is None or c == 0.0:
-        return fs, ft
-    hs = hs if S is None else hs[S]
-    a, b = np.float32(c) * hs, np.float32(c) * ht
-    return (a, b) if fs is None else (np.hstack([fs, a]), np.hstack([ft, b]))
-
-
-def _pointwise(X: np.ndarray, Y: np.ndarray, fx, fy) -> np.ndarray:
-    if fx is not None:
-        X, Y = np.hstack([X.astype(np.float32), fx]), np.hstack([Y.astype(np.float32), fy])
-    return nearest_rows(X, Y)
+def _pointwise(X: np.ndarray, Y: np.ndarray, blocks, scales) -> np.ndarray:
+    """Nearest rows of ``[X, c_1 a_1, ...]`` among ``[Y, c_1 b_1, ...]`` for the blocks ``(a_i, b_i)``
+    at scales ``c_i`` (a block at scale 0 is left out)."""
+    xs, ys = [X.astype(np.float32)], [Y.astype(np.float32)]
+    for (a, b), c in zip(blocks, scales):
+        if c > 0:
+            xs.append(np.float32(c) * a)
+            ys.append(np.float32(c) * b)
+    return nearest_rows(np.hstack(xs), np.hstack(ys))
