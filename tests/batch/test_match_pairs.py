@@ -29,6 +29,7 @@ def _rows(out):
         return table.rows
 
 
+@pytest.mark.slow
 def test_listed_pairs_matched_both_ways_with_their_cycle_error(strips, tmp_path, capsys):
     root, n = strips
     pairs = tmp_path / "pairs.txt"
@@ -60,23 +61,55 @@ def test_listed_pairs_matched_both_ways_with_their_cycle_error(strips, tmp_path,
     assert (again.scored, again.resumed) == (0, 4) and len(out.read_text().splitlines()) == 4
 
 
-def test_a_template_matched_both_ways_keeps_the_one_way_names(strips, tmp_path):
+@pytest.fixture(scope="module")
+def both_ways(strips, tmp_path_factory):
+    """The template matched both ways to s1: the table (CSV) and its batch summary."""
+    root, _ = strips
+    out = tmp_path_factory.mktemp("both") / "t.csv"
+    summary = run_batch([root / "s1.off"], out, {**OPTIONS, "both_directions": True},
+                        what=[f"match:{root / 'template.off'}"])
+    return out, summary
+
+
+@pytest.mark.slow
+def test_a_template_matched_both_ways_keeps_the_one_way_names(strips, both_ways):
     root, n = strips
-    out = tmp_path / "t.csv"
-    what = [f"match:{root / 'template.off'}"]
-    s = run_batch([root / "s1.off"], out, {**OPTIONS, "both_directions": True}, what=what)
+    out, s = both_ways
     assert (s.shapes, s.scored, s.failed) == (2, 2, 0)
     there, back = _rows(out)
     assert (there["match_direction"], back["match_direction"]) == ("template to shape", "shape to template")
     assert there["map_file"].endswith("maps/s1.txt") and back["map_file"].endswith("maps/s1.to_template.txt")
     assert back["match_source"] == there["match_target"] == str(root / "s1.off")
+    assert back["match_target"] == there["match_source"] == there["match_template"] == str(root / "template.off")
     assert np.loadtxt(back["map_file"]).shape == (n["s1"],) and np.loadtxt(there["map_file"]).shape == (n["template"],)
     assert there["cycle_error"] >= 0 and back["cycle_error"] >= 0
-    one = run_batch([root / "s1.off"], tmp_path / "one.csv", OPTIONS, what=what)  # one way: no cycle
+    assert [json.loads(r["params"])["direction"] for r in (there, back)] == ["template to shape", "shape to template"]
+
+
+def test_one_way_has_no_cycle_error_and_keeps_its_key(strips, tmp_path):
+    root, _ = strips
+    one = run_batch([root / "s1.off"], tmp_path / "one.csv", OPTIONS, what=[f"match:{root / 'template.off'}"])
     row = _rows(tmp_path / "one.csv")[0]
-    assert one.shapes == 1 and row["cycle_error"] is None and "both_directions" not in json.loads(row["params"])
+    assert one.shapes == 1 and row["cycle_error"] is None and row["match_direction"] == "template to shape"
+    assert not {"both_directions", "direction", "reference"} & set(json.loads(row["params"]))
 
 
+@pytest.mark.slow
+def test_killed_between_the_two_rows_of_a_shape_adds_only_the_missing_one(strips, both_ways, tmp_path):
+    root, _ = strips
+    lines = both_ways[0].read_text().splitlines(keepends=True)
+    out = tmp_path / "t.csv"
+    out.write_text("".join(lines[:-1]))  # the forward row only
+    again = run_batch([root / "s1.off"], out, {**OPTIONS, "both_directions": True},
+                      what=[f"match:{root / 'template.off'}"], resume=True)
+    assert (again.scored, again.resumed, again.failed) == (1, 1, 0)
+    rows = _rows(out)
+    assert out.read_text().splitlines(keepends=True)[:2] == lines[:2] and len(rows) == 2
+    assert [r["match_direction"] for r in rows] == ["template to shape", "shape to template"]
+    assert (tmp_path / "maps" / "s1.to_template.txt").exists()
+
+
+@pytest.mark.slow
 def test_the_cycle_error_is_zero_for_a_copy_and_large_for_a_scrambled_map(strips, tmp_path):
     root, _ = strips
     g = sc.load(root / "s1.off")

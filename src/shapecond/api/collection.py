@@ -139,7 +139,8 @@ def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None
 
 def cycle_error(geometry, there, back, landmarks=(), *, n_points: int = DEFAULT_POINTS, backend: str = "heat",
                 seed: int = 0, cache: bool = True) -> float | None:
-    """Mean geodesic distance between each sample ``x`` of ``geometry`` and ``back[there[x]]``, sqrt(area) units.
+    """Mean geodesic distance between each sample ``x`` of ``geometry`` and ``back[there[x]]``, in units of
+    sqrt(area) (of the sample diameter for a point cloud: ``matching.sampled.surface_unit``).
 
     Parameters
     ----------
