@@ -35,7 +35,7 @@ EXIT_SOME_FAILED = 3
 @click.option("--landmarks", "landmark_table", type=click.Path(dir_okay=False), default=None,
               help="match:TEMPLATE: a CSV file with columns shape,label,vertex (0-based ids) instead of a "
                    "NAME.lmk file (lines 'LABEL VERTEX_ID') beside each shape.")
-@click.option("--pairs", type=click.Path(dir_okay=False), default=None,
+@click.option("--pairs", "pairs_file", type=click.Path(dir_okay=False), default=None,
               help="Match the pairs this file lists (two shape names a line, the first matched to the second, "
                    "'#' comments) instead of a template to every shape (--what match, the default with --pairs).")
 @click.option("--both-directions", "both_directions", is_flag=True,
@@ -71,9 +71,9 @@ def command(inputs, out, what, as_json, **kw):
         raise InputError("give --epsilon or --epsilon-from-collection, not both")
     options = pop_shape_options(kw)
     options.update(effort=kw["effort"], matcher=kw["matcher"], landmark_table=kw["landmark_table"],
-                   pairs=kw["pairs"], both_directions=kw["both_directions"])
+                   pairs=kw["pairs_file"], both_directions=kw["both_directions"])
     source = click.get_current_context().get_parameter_source("what")
-    if kw["pairs"] is not None and source == click.core.ParameterSource.DEFAULT:  # --pairs says what to do
+    if kw["pairs_file"] is not None and source == click.core.ParameterSource.DEFAULT:  # --pairs says what to do
         what = ("match",)
     options["epsilon"] = "collection" if kw["epsilon_collection"] else kw["epsilon"]
     summary = run_batch(inputs, out, options, what=what, n_jobs=kw["jobs"], scheduler=kw["scheduler"],
