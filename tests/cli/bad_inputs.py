@@ -386,6 +386,8 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
         ["batch", *small, "--out", f["planted_lock/.t.csv.lock"].parent / "t.csv"])
     add("batch output with a planted journal link",
         ["batch", *small, "--out", f["planted_journal/.t.parquet.journal"].parent / "t.parquet"])
+    for name in ("ids_fifo", "dev_zero.off", "missing.off", "victim.txt", "good.off"):  # not a pairs list
+        add(f"batch pairs list {name}", ["batch", f["good.off"], "--pairs", f[name], "--out", "OUT.csv"])
     # an output that is an input or another output (same file through links), or has no name
     g = str(f["good.off"])
     pair = ["match", GOOD, GOOD, "--landmarks-source", "0", "--landmarks-target", "0", "--points", "8", "--no-cache"]

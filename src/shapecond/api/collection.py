@@ -7,6 +7,17 @@ match:TEMPLATE``, on joblib or Dask).  The direction is **template → shape**: 
 map holds, for every template vertex id, the id of its image on the shape, so
 that every map of a collection has the template's length and the error bar is
 measured on the template, in units of the template's sqrt(area).
+
+On request (``both_directions``) each shape is also matched to the template
+(**shape → template**, ``REVERSE``: the map has the shape's length, its bar is
+in the shape's sqrt(area)), and both maps get their **cycle error**
+(``cycle_error``): the mean geodesic distance, on the source's samples, between
+each sample and its image under the map followed by the opposite one (A → T →
+A for the shape → template map), in units of the source's sqrt(area).  The
+geodesics are the rows of the samples the matcher itself used
+(``matching.sampled.sample_surface``, cached), so a cycle costs no new solve when
+the cache is on.  A map that sends its source onto one point of the target and
+back scores like a bad map; a faithful pair of maps scores near 0.
 """
 
 from __future__ import annotations
@@ -20,11 +31,14 @@ import numpy as np
 
 from ..errors import InputError, ShapecondError
 from ..shapes.landmark_files import check_in_range, landmarks_of, pair_by_label, read_landmark_csv
-from .inputs import load
+from ..matching.sampled import sample_surface
+from .inputs import DEFAULT_POINTS, load
 from .matching import match
 
 #: Direction of every map of a collection.
 DIRECTION = "template to shape"
+#: Direction of the second map of a shape matched both ways.
+REVERSE = "shape to template"
 #: Fewest shared labels a shape needs to be matched.
 MIN_PAIRS = 3
 #: A bar above this (sqrt(area) of the template) says "annotate more": the mean geodesic error of
@@ -67,7 +81,38 @@ def write_map(path, vertex_map) -> Path:
     return Path(path)
 
 
-def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None, **match_options):
+def label_pairs(reference_lm: dict, shape_lm: tuple | None, reference: str = "the template"):
+    """(shared labels, the reference's ids, the shape's ids) of ``pair_by_label``; ``InputError`` for a shape
+    without landmarks or with fewer than ``MIN_PAIRS`` labels shared with ``reference``."""
+    if shape_lm is None:
+        raise InputError("no landmarks for this shape (no NAME.lmk beside it and no rows in the landmark table)")
+    labels, ids_r, ids_s = pair_by_label(reference_lm, shape_lm[0])
+    if len(labels) < MIN_PAIRS:
+        raise InputError(f"{len(labels)} landmark labels shared with {reference} ({shape_lm[1]}); "
+                         f"matching needs at least {MIN_PAIRS}")
+    return labels, ids_r, ids_s
+
+
+def _match_fields(template, shape, template_lm: dict, shape_lm: tuple | None, reverse: bool, match_options):
+    """(the row's match fields, the ``MatchResult``) of one direction (``match_to_template``)."""
+    labels, ids_t, ids_s = label_pairs(template_lm, shape_lm, match_options.pop("reference", "the template"))
+    flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
+    loaded = load(shape, **flags)
+    if hasattr(loaded, "ids"):
+        check_in_range(ids_s, int(loaded.ids.max()) + 1, shape_lm[1])
+    pair = (loaded, template, ids_s, ids_t) if reverse else (template, loaded, ids_t, ids_s)
+    result = match(*pair, **{"suggest": 1, **match_options})
+    bar = result.summary.get("error_bar") or {}
+    first = (result.summary.get("suggestions") or [{}])[0]
+    fields = {"landmark_pairs": len(labels), "landmark_labels": " ".join(labels), "bar": bar.get("bar"),
+              "bar_epsilon": bar.get("epsilon"), "bar_epsilon_hat": bar.get("epsilon_hat"),
+              "suggest_source_id": first.get("source_id"), "suggest_image_id": first.get("image_id"),
+              "suggest_bar_after": first.get("bar_after")}
+    return fields, result
+
+
+def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None, *, reverse: bool = False,
+                      **match_options):
     """(the row's match fields, the map) of ``shape`` matched from ``template`` (module docstring).
 
     Parameters
@@ -77,34 +122,80 @@ def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None
     template_lm : the template's ``{label: vertex id}``.
     shape_lm : the shape's (``{label: vertex id}``, where they were read), as ``landmarks_of`` gives them;
         None when it has none.
-    **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``seed``...); ``suggest`` defaults to 1.
+    reverse : match the shape to the template instead (``REVERSE``; the suggestion is then a shape vertex).
+    **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``seed``...); ``suggest`` defaults to 1;
+        ``reference`` names the template in messages (default "the template").
 
     Returns
     -------
     (dict, ndarray): ``landmark_pairs``, ``landmark_labels``, ``bar``, ``bar_epsilon``, ``bar_epsilon_hat``,
-    ``suggest_source_id``, ``suggest_image_id``, ``suggest_bar_after``; the map (template id -> shape id).
-    ``InputError`` for a shape without landmarks, with fewer than ``MIN_PAIRS`` shared labels, or with an id
-    out of range.
+    ``suggest_source_id``, ``suggest_image_id``, ``suggest_bar_after``; the map (template id -> shape id,
+    or shape id -> template id with ``reverse``).  ``InputError`` for a shape without landmarks, with fewer
+    than ``MIN_PAIRS`` shared labels, or with an id out of range.
     """
-    if shape_lm is None:
-        raise InputError("no landmarks for this shape (no NAME.lmk beside it and no rows in the landmark table)")
-    found = shape_lm
-    labels, ids_t, ids_s = pair_by_label(template_lm, found[0])
-    if len(labels) < MIN_PAIRS:
-        raise InputError(f"{len(labels)} landmark labels shared with the template ({found[1]}); "
-                         f"matching needs at least {MIN_PAIRS}")
-    flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
-    loaded = load(shape, **flags)
-    if hasattr(loaded, "ids"):
-        check_in_range(ids_s, int(loaded.ids.max()) + 1, found[1])
-    result = match(template, loaded, ids_t, ids_s, **{"suggest": 1, **match_options})
-    bar = result.summary.get("error_bar") or {}
-    first = (result.summary.get("suggestions") or [{}])[0]
-    fields = {"landmark_pairs": len(labels), "landmark_labels": " ".join(labels), "bar": bar.get("bar"),
-              "bar_epsilon": bar.get("epsilon"), "bar_epsilon_hat": bar.get("epsilon_hat"),
-              "suggest_source_id": first.get("source_id"), "suggest_image_id": first.get("image_id"),
-              "suggest_bar_after": first.get("bar_after")}
+    fields, result = _match_fields(template, shape, template_lm, shape_lm, reverse, dict(match_options))
     return fields, result.map
+
+
+def cycle_error(geometry, there, back, landmarks=(), *, n_points: int = DEFAULT_POINTS, backend: str = "heat",
+                seed: int = 0, cache: bool = True) -> float | None:
+    """Mean geodesic distance between each sample ``x`` of ``geometry`` and ``back[there[x]]``, in units of
+    sqrt(area) (of the sample diameter for a point cloud: ``matching.sampled.surface_unit``).
+
+    Parameters
+    ----------
+    geometry : the loaded source shape (``Geometry``).
+    there : its map to another shape (one target id per source id, -1: dropped).
+    back : the other shape's map to this one (one source id per target id, -1: dropped).
+    landmarks : internal vertex indices sampled first (as the matcher sampled them, so that the rows are
+        the cached ones of ``matching.sampled.sample_surface``).
+    n_points, backend, seed, cache : of the samples (those of ``match``).
+
+    Returns
+    -------
+    float, or None when no sample makes the round trip (every one dropped on the way).
+    """
+    surf = sample_surface(geometry, min(int(n_points), geometry.n_vertices), backend, seed, landmarks, cache)
+    there, back = np.asarray(there, dtype=np.int64), np.asarray(back, dtype=np.int64)
+    mid = there[geometry.ids[surf.samples]]
+    ok = (mid >= 0) & (mid < back.size)
+    end = np.full(mid.shape, -1, dtype=np.int64)
+    end[ok] = back[mid[ok]]
+    lookup = np.full(int(geometry.ids.max()) + 1, -1, dtype=np.int64)
+    lookup[geometry.ids] = np.arange(geometry.n_vertices)
+    ok &= (end >= 0) & (end < lookup.size)
+    ok[ok] = lookup[end[ok]] >= 0
+    if not ok.any():
+        return None
+    rows = surf.rows[np.flatnonzero(ok), lookup[end[ok]]].astype(np.float64)
+    return float(rows.mean() / surf.unit)
+
+
+def _cycle(result, back, match_options) -> float | None:
+    """``cycle_error`` of a ``MatchResult`` followed by the map ``back``, on the samples ``match`` used."""
+    keys = {"n_points": DEFAULT_POINTS, "backend": "heat", "seed": 0, "cache": True}
+    source, _, landmarks, _ = result.drawing
+    return cycle_error(source, result.map, back, landmarks, **{k: match_options.get(k, v) for k, v in keys.items()})
+
+
+def match_both_ways(template, shape, template_lm: dict, shape_lm: tuple | None, **match_options):
+    """[(fields, map) template -> shape, (fields, map | None) shape -> template], each with ``cycle_error``.
+
+    ``match_to_template`` in both directions; ``InputError`` as it when the first direction fails.  When
+    only the second fails, its fields are ``{"error": the one-line message}`` and both cycle errors None.
+    """
+    fields, result = _match_fields(template, shape, template_lm, shape_lm, False, dict(match_options))
+    try:
+        back_fields, back = _match_fields(template, shape, template_lm, shape_lm, True, dict(match_options))
+    except ShapecondError as exc:
+        return [({**fields, "cycle_error": None}, result.map), ({"error": _one_line(exc)}, None)]
+    options = {k: v for k, v in match_options.items() if k != "reference"}
+    return [({**fields, "cycle_error": _cycle(result, back.map, options)}, result.map),
+            ({**back_fields, "cycle_error": _cycle(back, result.map, options)}, back.map)]
+
+
+def _one_line(exc) -> str:
+    return str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
 
 
 class Maps(Mapping):
@@ -156,7 +247,44 @@ def _table(rows: list[dict]):
     return pd.DataFrame(rows)
 
 
-def match_collection(template, shapes, landmarks=None, *, maps_dir=None, **match_options):
+def reverse_name(name: str) -> str:
+    """The name of a shape's map to the template (``NAME.to_template``), beside ``NAME``, its map from it."""
+    return f"{name}.to_template"
+
+
+def _shape_rows(loaded, shape, name, template_lm, found, both, match_options) -> list[tuple[dict, object]]:
+    """[(row, map or None)] of one shape of ``match_collection``: one direction, or both."""
+    t0 = time.perf_counter()
+    heads = [{"shape": name, "map": name, "file": shape, "direction": DIRECTION}]
+    if both:
+        heads.append({"shape": name, "map": reverse_name(name), "file": shape, "direction": REVERSE})
+    try:
+        if found is None or isinstance(found, Exception):
+            raise found or InputError("no landmarks for this shape (no NAME.lmk beside it and no rows in the "
+                                      "landmark table)")
+        done = (match_both_ways(loaded, shape, template_lm, found, **match_options) if both
+                else [match_to_template(loaded, shape, template_lm, found, **match_options)])
+    except ShapecondError as exc:
+        done = [({"error": _one_line(exc)}, None)] * len(heads)
+    seconds = time.perf_counter() - t0
+    out = []
+    for head, (fields, vertex_map) in zip(heads, done):
+        row = {**head, **fields}
+        if "error" not in fields:
+            row["annotate_more"] = fields["bar"] is not None and fields["bar"] > ANNOTATE_MORE
+        out.append(({**row, "seconds": seconds, "error": fields.get("error")}, vertex_map))
+    return out
+
+
+def _landmarks_or_error(shape, table):
+    try:
+        return landmarks_of(shape, table)
+    except ShapecondError as exc:
+        return exc
+
+
+def match_collection(template, shapes, landmarks=None, *, maps_dir=None, both_directions: bool = False,
+                     **match_options):
     """Match ``template`` to every shape of ``shapes`` with the landmarks their files name (module docstring).
 
     Parameters
@@ -167,14 +295,18 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, **match
         ``{shape name: {label: vertex id}}``.  Points are paired by label (``shapes.landmark_files``).
     maps_dir : a folder to write each map to (``NAME.txt``, atomically; read back on access); None keeps
         the maps in memory.
+    both_directions : also match each shape to the template (``REVERSE``, its map named
+        ``NAME.to_template``, ``reverse_name``) and give both maps their ``cycle_error``.
     **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``dense``, ``seed``...).
 
     Returns
     -------
     (table, maps): ``table`` a pandas DataFrame when pandas can be imported, else a list of dicts, one
-    row per shape in order: ``shape`` (map name), ``file``, ``direction``, the fields of
-    ``match_to_template``, ``annotate_more`` (bar > ``ANNOTATE_MORE``), ``seconds`` and ``error`` (the
-    one-line message of a shape that failed; the others are then missing).  ``maps`` a ``Maps``: name ->
+    row per shape in order (two with ``both_directions``, template to shape first): ``shape`` (its name),
+    ``map`` (the map's name), ``file``, ``direction``, the fields of ``match_to_template`` (with
+    ``both_directions`` also ``cycle_error``: ``match_both_ways``), ``annotate_more`` (bar >
+    ``ANNOTATE_MORE``), ``seconds`` (the shape's, both directions together) and ``error`` (the
+    one-line message of a map that failed; the others are then missing).  ``maps`` a ``Maps``: map name ->
     map, read lazily.  ``InputError`` when the template, its landmarks or the landmark CSV file cannot be
     read or a template id is out of range; a shape's own problem (no landmarks, a broken ``.lmk``, fewer
     than ``MIN_PAIRS`` shared labels, an id out of range, a file that does not load) is its row's error.
@@ -197,6 +329,8 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, **match
     table = read_landmark_csv(landmarks) if isinstance(landmarks, (str, os.PathLike)) else landmarks
     if table is not None and not isinstance(table, dict):
         raise InputError("landmarks must be None, the path of a CSV file or a dict {shape: {label: vertex}}")
+    if not isinstance(both_directions, bool):
+        raise InputError(f"both_directions must be True or False, got {both_directions!r}")
     shapes = [str(s) for s in shapes]
     names = map_names(shapes)
     flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
@@ -205,18 +339,14 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, **match
     check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {template}")
     maps, rows = Maps(maps_dir), []
     for name, shape in zip(names, shapes):
-        row = {"shape": name, "file": shape, "direction": DIRECTION}
-        t0 = time.perf_counter()
-        try:
-            fields, vertex_map = match_to_template(loaded, shape, template_lm, landmarks_of(shape, table),
-                                                   **match_options)
-            maps.add(name, vertex_map)
-            row.update(fields, annotate_more=fields["bar"] is not None and fields["bar"] > ANNOTATE_MORE)
-        except ShapecondError as exc:
-            row["error"] = str(exc).splitlines()[0] if str(exc) else exc.__class__.__name__
-        row["seconds"] = time.perf_counter() - t0
-        rows.append({**row, "error": row.get("error")})
+        found = _landmarks_or_error(shape, table)
+        for row, vertex_map in _shape_rows(loaded, shape, name, template_lm, found, both_directions,
+                                           match_options):
+            if vertex_map is not None:
+                maps.add(row["map"], vertex_map)
+            rows.append(row)
     return _table(rows), maps
 
 
-__all__ = ["ANNOTATE_MORE", "DIRECTION", "Maps", "match_collection", "match_to_template"]
+__all__ = ["ANNOTATE_MORE", "DIRECTION", "REVERSE", "Maps", "cycle_error", "match_both_ways", "match_collection",
+           "match_to_template", "reverse_name"]

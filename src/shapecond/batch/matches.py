@@ -1,4 +1,4 @@
-"""A collection matched to a template (``--what match:TEMPLATE``): landmarks, parameters and maps.
+"""A collection matched to a template (``--what match:TEMPLATE``) or in listed pairs: landmarks, parameters, maps.
 
 Before any row is computed, this process reads the template's landmarks and
 loads the template (a template without landmarks, a bad landmark file of the
@@ -10,11 +10,23 @@ none, becomes an error row; the batch goes on.  The label-matched pairs enter
 the row's ``params``, so that ``--resume`` recomputes a shape whose landmarks
 were changed, and only it.
 
-The workers match (``api.collection.match_to_template``, template → shape) and
-return the map with the row; this process writes it to ``maps/NAME.txt``
-beside the table, atomically (``output.atomic_open``), **before** appending the
-row, so that a row in the table always has its whole map on disk, and a batch
-killed at any moment leaves no torn map.
+With ``--pairs FILE`` (``--what match``) the shapes are matched as the file
+lists them (``evaluation.datasets.read_pairs``: two shape names a line, the
+first matched to the second); a name that is not one of the inputs, a pair
+listed twice, an empty list or a shape paired with itself stops the batch
+before anything is written.  Each line is one task whose row's ``file`` is
+the second shape; the first takes the template's part (its landmarks give the
+label order) and its path and content hash enter the row's ``params``.
+
+The workers match (``api.collection.match_to_template``, reference → shape;
+with ``--both-directions`` ``match_both_ways``: both maps in one task, so that
+each gets its cycle error without a geodesic on this side) and return the
+maps with the row; this process writes each map (``map_name``) in ``maps/``
+beside the table, atomically (``output.atomic_open``), **before** appending
+its row, so that a row in the table always has its whole map on disk, and a
+batch killed at any moment leaves no torn map.  A task's rows that are
+already in the table (a kill between the two rows of a shape) are not
+appended again.
 """
 
 from __future__ import annotations
@@ -23,16 +35,50 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..api.collection import DIRECTION, REVERSE, map_names, reverse_name, write_map
 from ..errors import InputError
+from ..shapes.landmark_files import pair_by_label
 from .rows import parse_what
 
 #: The folder of the maps, beside the table.
 MAPS_FOLDER = "maps"
 
 
+#: The columns that belong to one map (``api.collection.match_to_template``'s fields and the cycle error).
+MAP_FIELDS = ("landmark_pairs", "landmark_labels", "bar", "bar_epsilon", "bar_epsilon_hat", "suggest_source_id",
+              "suggest_image_id", "suggest_bar_after", "cycle_error", "map_file")
+#: The directions of the maps of a listed pair (``--pairs``), the first as the list gives it.
+PAIR_DIRECTIONS = ("first to second", "second to first")
+
+
+@dataclass(frozen=True)
+class MatchJob:
+    """What a worker needs to match one shape (``rows.shape_row``'s ``match``).
+
+    Attributes
+    ----------
+    reference : the template, or the first shape of a listed pair: the first map's source.
+    reference_lm : its ``{label: vertex id}`` (their order is the pairs' order).
+    shape_lm : the shape's ``landmarks_of`` result (None: none).
+    directions : the ``match_direction`` of each map, reference → shape first.
+    template : the ``match_template`` column (None with ``--pairs``).
+    reference_words : how messages name the reference.
+    """
+
+    reference: str
+    reference_lm: dict
+    shape_lm: tuple | None
+    directions: tuple
+    template: str | None = None
+    reference_words: str = "the template"
+
+
 @dataclass
 class MatchPlan:
-    """What matching needs besides the batch's options; empty (``template`` None) without it."""
+    """What matching needs besides the batch's options; inactive (``template`` and ``pairs`` None) without it.
+
+    A *unit* is one task: (shape, reference), the reference the template or the first shape of a pair.
+    """
 
     template: str | None = None
     template_lm: dict = field(default_factory=dict)
@@ -40,32 +86,95 @@ class MatchPlan:
     errors: dict = field(default_factory=dict)       # spec -> why its landmarks cannot be read
     names: dict = field(default_factory=dict)        # spec -> map name
     maps_dir: Path | None = None
+    pairs: list | None = None                        # --pairs: [(first spec, second spec)]
+    both: bool = False                               # --both-directions
 
-    def params(self, params: str, specs) -> list[str]:
-        """Each shape's ``params``: the batch's, plus its label-matched landmark pairs."""
-        if self.template is None:
-            return [params] * len(specs)
-        from ..shapes.landmark_files import pair_by_label
+    @property
+    def active(self) -> bool:
+        return self.template is not None or self.pairs is not None
 
-        base, out = json.loads(params), []
-        for spec in specs:
-            found = self.shape_lm.get(spec)
-            pairs = None if found is None else [list(p) for p in zip(*pair_by_label(self.template_lm, found[0]))]
-            out.append(json.dumps({**base, "pairs": pairs}, sort_keys=True, separators=(",", ":")))
-        return out
+    @property
+    def directions(self) -> tuple:
+        """The ``match_direction`` of each row of a unit."""
+        pair = PAIR_DIRECTIONS if self.pairs is not None else (DIRECTION, REVERSE)
+        return pair if self.both else pair[:1]
 
-    def task_kwargs(self, spec: str) -> dict:
-        """The keywords of ``rows.shape_row`` for ``spec``."""
-        return {} if self.template is None else {"landmarks": (self.template_lm, self.shape_lm.get(spec))}
+    def units(self, specs) -> list[tuple]:
+        """(shape, reference) of every task: each shape with the template, each listed pair, or each shape."""
+        if self.pairs is not None:
+            return [(second, first) for first, second in self.pairs]
+        return [(spec, self.template) for spec in specs]
 
-    def write_map(self, row: dict) -> None:
+    def _reference_lm(self, reference) -> dict:
+        if self.pairs is None:
+            return self.template_lm
+        found = self.shape_lm.get(reference)
+        return {} if found is None else found[0]
+
+    def params(self, params: str, unit, hashes: dict) -> list[str]:
+        """The ``params`` of each row of ``unit``: the batch's, plus its label-matched landmark pairs (and, with
+        ``--pairs``, the first shape's path and content hash; with both directions, the row's direction)."""
+        if not self.active:
+            return [params]
+        spec, reference = unit
+        found = self.shape_lm.get(spec)
+        pairs = (None if found is None else
+                 [list(p) for p in zip(*pair_by_label(self._reference_lm(reference), found[0]))])
+        one = {**json.loads(params), "pairs": pairs}
+        if self.pairs is not None:
+            one.update(reference=reference, reference_hash=hashes.get(reference))
+        rows = [one] if not self.both else [{**one, "direction": d} for d in self.directions]
+        return [json.dumps(r, sort_keys=True, separators=(",", ":")) for r in rows]
+
+    def unit_error(self, unit, unreadable: dict) -> str | None:
+        """Why ``unit`` cannot be sent to a worker (its shape, or its pair's first shape, is unreadable)."""
+        spec, reference = unit
+        if spec in unreadable:
+            return unreadable[spec]
+        if self.pairs is not None and reference in unreadable:
+            return f"the pair's first shape {self.names[reference]}: {unreadable[reference]}"
+        return None
+
+    def task_kwargs(self, unit) -> dict:
+        """The keywords of ``rows.shape_row`` for ``unit``."""
+        if not self.active:
+            return {}
+        spec, reference = unit
+        words = "the template" if self.pairs is None else f"the pair's first shape {self.names[reference]}"
+        return {"match": MatchJob(reference, self._reference_lm(reference), self.shape_lm.get(spec),
+                                  self.directions, self.template, words)}
+
+    def map_name(self, unit, k: int) -> str:
+        """The name of the ``k``-th map of ``unit`` (``maps/NAME.txt``): ``NAME`` with one direction to a
+        template (as before there were two), ``NAME.to_template`` for the way back, ``FIRST.to.SECOND``
+        (and ``SECOND.to.FIRST``) for a listed pair."""
+        spec, reference = unit
+        if self.pairs is None:
+            return self.names[spec] if k == 0 else reverse_name(self.names[spec])
+        ends = (self.names[reference], self.names[spec])
+        return ".to.".join(ends if k == 0 else ends[::-1])
+
+    def rows_of(self, row: dict, unit, params: list[str]) -> list[dict]:
+        """The rows of one task's result ``row`` (one per direction), each map written first (atomically)."""
+        if not self.active:
+            return [row]
+        rows = [row]
+        if self.both:
+            back = row.pop("_reverse", None)
+            if back is None:  # the task failed before its second map: the same error
+                back = {"match_direction": self.directions[1], "match_source": unit[0], "match_target": unit[1]}
+            rows.append({**row, **dict.fromkeys(MAP_FIELDS), "_map": None, **back, "params": params[1]})
+        for k, r in enumerate(rows):
+            self._write_map(r, self.map_name(unit, k))
+        return rows
+
+    def _write_map(self, row: dict, name: str) -> None:
         """Write a row's map (``"_map"``, removed from the row) and name its file in the row."""
         vertex_map = row.pop("_map", None)
-        if vertex_map is None or self.template is None:
+        if vertex_map is None:
+            row["map_file"] = None
             return
-        from ..api.collection import write_map
-
-        path = self.maps_dir / f"{self.names[row['file']]}.txt"
+        path = self.maps_dir / f"{name}.txt"
         write_map(path, vertex_map)
         row["map_file"] = str(path)
 
@@ -87,21 +196,54 @@ def _shape_landmarks(specs, table) -> tuple[dict, dict]:
     return found, errors
 
 
+def _pair_specs(path, specs, names: dict, both: bool) -> list[tuple[str, str]]:
+    """The listed pairs as (first spec, second spec): ``read_pairs``, each name one of the inputs (its map
+    name, or its file name), no pair twice (nor reversed, with both directions)."""
+    from ..evaluation.datasets import read_pairs
+
+    by_name = {}
+    for spec in specs:
+        by_name.setdefault(names[spec], spec)
+        by_name.setdefault(Path(spec).name, spec)
+    out, seen = [], set()
+    for a, b in read_pairs(path):
+        missing = next((n for n in (a, b) if n not in by_name), None)
+        if missing is not None:
+            raise InputError(f"{path}: the pairs list names {missing!r}, which is not one of the input shapes")
+        pair = (by_name[a], by_name[b])
+        if pair[0] == pair[1]:
+            raise InputError(f"{path}: {a} and {b} are one shape, paired with itself")
+        if pair in seen or (both and pair[::-1] in seen):
+            raise InputError(f"{path}: the pair {a} {b} is listed twice" + (" (in either order, with "
+                             "--both-directions each pair is matched both ways)" if both else ""))
+        seen.add(pair)
+        out.append(pair)
+    return out
+
+
 def plan_matching(specs, options: dict, out) -> MatchPlan:
-    """The ``MatchPlan`` of a batch (module docstring); ``InputError`` for an unusable template."""
-    template = parse_what(options["what"]).match
-    if template is None:
+    """The ``MatchPlan`` of a batch (module docstring); ``InputError`` for an unusable template or pairs list."""
+    what = parse_what(options["what"])
+    if not what.matching:
         return MatchPlan()
+    from ..shapes.landmark_files import read_landmark_csv
+
+    names = dict(zip(specs, map_names(specs)))
+    both, maps_dir = bool(options["both_directions"]), Path(out).absolute().parent / MAPS_FOLDER
+    if what.pairs:
+        pairs = _pair_specs(options["pairs"], specs, names, both)
+        table = read_landmark_csv(options["landmark_table"]) if options.get("landmark_table") else None
+        found, errors = _shape_landmarks(list(dict.fromkeys(s for p in pairs for s in p)), table)
+        return MatchPlan(None, {}, found, errors, names, maps_dir, pairs, both)
     from .. import api
-    from ..api.collection import map_names, template_landmarks
-    from ..shapes.landmark_files import check_in_range, read_landmark_csv
+    from ..api.collection import template_landmarks
+    from ..shapes.landmark_files import check_in_range
 
     table = read_landmark_csv(options["landmark_table"]) if options.get("landmark_table") else None
-    loaded = api.load(template, largest_component=bool(options["largest_component"]), force=bool(options["force"]))
-    template_lm = template_landmarks(template, table)
+    loaded = api.load(what.match, largest_component=bool(options["largest_component"]), force=bool(options["force"]))
+    template_lm = template_landmarks(what.match, table)
     if not hasattr(loaded, "ids"):
-        raise InputError(f"{template}: the template must be a mesh or point cloud, not a distance matrix")
-    check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {template}")
+        raise InputError(f"{what.match}: the template must be a mesh or point cloud, not a distance matrix")
+    check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {what.match}")
     found, errors = _shape_landmarks(specs, table)
-    return MatchPlan(template, template_lm, found, errors, dict(zip(specs, map_names(specs))),
-                     Path(out).absolute().parent / MAPS_FOLDER)
+    return MatchPlan(what.match, template_lm, found, errors, names, maps_dir, both=both)

@@ -1,11 +1,12 @@
-"""``report.html`` of a batch matched to a template: which maps to trust and where to annotate more.
+"""``report.html`` of a matched batch: which maps to trust and where to annotate more.
 
-Written beside the table after every ``--what match:TEMPLATE`` run, from the
-batch's rows (those already in the table included): the shapes sorted by their
-error bar, a histogram of the bars, the shapes whose bar says "annotate more"
+Written beside the table after every ``--what match:TEMPLATE`` (or ``--pairs``) run, from the
+batch's rows (those already in the table included): the maps sorted by their
+error bar with their cycle error beside it (maps matched both ways), a
+histogram of the bars, the maps whose bar says "annotate more"
 (bar above ``api.collection.ANNOTATE_MORE`` = 0.05 sqrt(area), the mean geodesic
 error at which the shape-correspondence literature counts a map as failed) with
-the suggested next landmark, and the shapes that failed.  One self-contained
+the suggested next landmark, and the maps that failed.  One self-contained
 file (the histogram is an inline PNG), written atomically.
 """
 
@@ -44,7 +45,7 @@ def _histogram(bars, threshold) -> str:
     ax = fig.add_subplot(1, 1, 1)
     ax.hist(bars, bins=min(30, max(5, len(bars))), color="#4477aa")
     ax.axvline(threshold, color="#cc3311", linestyle="--", label=f"annotate more (> {threshold:g})")
-    ax.set_xlabel("error bar (sqrt(area) of the template)")
+    ax.set_xlabel("error bar (sqrt(area) of the map's source)")
     ax.set_ylabel("shapes")
     ax.legend()
     buf = io.BytesIO()
@@ -60,39 +61,62 @@ def _table(header, rows, bad=()) -> str:
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
+def _label(row) -> str:
+    """A row's map as a person reads it: ``source → target`` (shape names), or the shape's name."""
+    if row.get("match_source") and row.get("match_target"):
+        return f"{Path(row['match_source']).stem} → {Path(row['match_target']).stem}"
+    return Path(row["file"]).stem
+
+
+def _intro(rows, ok, more, failed) -> str:
+    template = next((r["match_template"] for r in rows if r.get("match_template")), None)
+    if template is not None:
+        ways = ("template to shape and shape to template" if any(r.get("match_direction") == "shape to template"
+                                                                 for r in rows) else "template to shape")
+        head = f"Template {html.escape(str(template))} matched to {len({r['file'] for r in rows})} shapes ({ways})"
+    else:
+        head = f"{len({r['file'] for r in rows})} shapes matched in listed pairs"
+    return (f"<p>{head}: {len(rows)} maps (each map gives, for every vertex id of its source, the vertex id of "
+            f"its image on the target), {len(ok)} matched, {len(more)} of them say <b>annotate more</b>, "
+            f"{len(failed)} failed.</p>")
+
+
 def report_html(rows: list[dict]) -> str:
     """The report page of the batch rows ``rows`` (module docstring)."""
     from ..api.collection import ANNOTATE_MORE
 
-    ok = sorted((r for r in rows if r["error"] is None and r["bar"] is not None), key=lambda r: (r["bar"], r["file"]))
+    ok = sorted((r for r in rows if r["error"] is None and r["bar"] is not None),
+                key=lambda r: (r["bar"], r["file"], _label(r)))
     failed = [r for r in rows if r["error"] is not None]
     more = [r for r in ok if r["bar"] > ANNOTATE_MORE]
-    template = next((r["match_template"] for r in rows if r.get("match_template")), None)
-    name = {r["file"]: Path(r["file"]).stem for r in rows}
-    out = [(f"<p>Template {html.escape(str(template or '?'))} matched to {len(rows)} shapes (direction: template to "
-            f"shape; every map gives the shape's vertex id of each template vertex id): {len(ok)} matched, "
-            f"{len(more)} of them say <b>annotate more</b>, {len(failed)} failed.</p>"),
+    out = [_intro(rows, ok, more, failed),
            ("<p>The bar is the mean error a map that fits the landmarks and distorts distances no more than this one "
-            "may have, in units of the template's sqrt(area) (it held the true error in 92 % of held-out pairs). "
-            f"Above {ANNOTATE_MORE:g} sqrt(area), where the shape-correspondence literature counts a map as "
-            "failed, the report says annotate more.</p>"),
-           _histogram([r["bar"] for r in ok], ANNOTATE_MORE), "<h2>Annotate more</h2>"]
-    out.append(_table(["shape", "bar", "pairs", "next landmark: template vertex", "its provisional image",
+            "may have, in units of the sqrt(area) of the map's source (it held the true error in 92 % of held-out "
+            f"pairs). Above {ANNOTATE_MORE:g} sqrt(area), where the shape-correspondence literature counts a map as "
+            "failed, the report says annotate more.</p>")]
+    if any(r.get("cycle_error") is not None for r in ok):
+        out.append("<p>The cycle (maps matched both ways) is a second signal beside the bar: the mean geodesic "
+                   "distance between each sample of the source and its image under the map followed by the map "
+                   "back (source → target → source), in sqrt(area) of the source; near 0 for a consistent pair "
+                   "of maps.</p>")
+    out += [_histogram([r["bar"] for r in ok], ANNOTATE_MORE), "<h2>Annotate more</h2>"]
+    out.append(_table(["map", "bar", "cycle", "pairs", "next landmark: source vertex", "its provisional image",
                        "bar after"],
-                      [[name[r["file"]], _num(r["bar"]), r["landmark_pairs"], _num(r["suggest_source_id"]),
-                        _num(r["suggest_image_id"]), _num(r["suggest_bar_after"])] for r in more])
+                      [[_label(r), _num(r["bar"]), _num(r.get("cycle_error")), r["landmark_pairs"],
+                        _num(r["suggest_source_id"]), _num(r["suggest_image_id"]), _num(r["suggest_bar_after"])]
+                       for r in more])
                if more else "<p>No shape: every map's bar is below the threshold.</p>")
-    out.append("<h2>Every shape, by its bar</h2>")
-    out.append(_table(["shape", "bar", "ε", "ε̂", "pairs", "labels", "map", "seconds"],
-                      [[name[r["file"]], _num(r["bar"]), _num(r["bar_epsilon"]), _num(r["bar_epsilon_hat"]),
-                        r["landmark_pairs"], r["landmark_labels"] or "", os.path.basename(r["map_file"] or ""),
-                        _num(r["seconds"], 2)] for r in ok],
+    out.append("<h2>Every map, by its bar</h2>")
+    out.append(_table(["map", "bar", "cycle", "ε", "ε̂", "pairs", "labels", "map file", "seconds"],
+                      [[_label(r), _num(r["bar"]), _num(r.get("cycle_error")), _num(r["bar_epsilon"]),
+                        _num(r["bar_epsilon_hat"]), r["landmark_pairs"], r["landmark_labels"] or "",
+                        os.path.basename(r["map_file"] or ""), _num(r["seconds"], 2)] for r in ok],
                       bad={k for k, r in enumerate(ok) if r["bar"] > ANNOTATE_MORE}))
     if failed:
         out.append("<h2>Failed</h2>")
-        out.append(_table(["shape", "error"], [[name[r["file"]], r["error"]] for r in failed]))
-    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>shapecond batch: matched to "
-            f"a template</title><style>{_STYLE}</style></head><body><h1>Matched to a template</h1>\n"
+        out.append(_table(["map", "error"], [[_label(r), r["error"]] for r in failed]))
+    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>shapecond batch: matched "
+            f"maps</title><style>{_STYLE}</style></head><body><h1>Matched maps</h1>\n"
             + "\n".join(out) + "\n</body></html>\n")
 
 

@@ -29,11 +29,11 @@ from .inputs import content_hash
 DEFAULT_OPTIONS = {"points": None, "metric": "geodesic", "geodesic_backend": "heat", "seed": 0,
                    "largest_component": False, "no_cache": False, "target": None, "target_factor": 8,
                    "symmetry_map": None, "effort": "default", "what": ["score"], "force": False, "epsilon": None,
-                   "matcher": None, "landmark_table": None}
+                   "matcher": None, "landmark_table": None, "pairs": None, "both_directions": False}
 #: ``epsilon`` read off the collection itself (``api.level.collection_level``) rather than given.
 COLLECTION = "collection"
 #: Options of matching (``--what match:TEMPLATE``): left out of the parameters of a batch without it.
-MATCH_OPTIONS = ("matcher", "landmark_table")
+MATCH_OPTIONS = ("matcher", "landmark_table", "pairs", "both_directions")
 #: Options that shape the results (``no_cache`` and ``force`` do not).
 KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k not in ("no_cache", "force"))
 
@@ -41,22 +41,30 @@ KEY_OPTIONS = tuple(k for k in DEFAULT_OPTIONS if k not in ("no_cache", "force")
 @dataclass(frozen=True)
 class What:
     """What to compute beyond ``info``: the global score, the local score, K landmarks of a method,
-    the map from a template (its absolute path)."""
+    the map from a template (its absolute path), or the maps of listed pairs (``pairs``: ``match`` alone,
+    the pairs in the ``pairs`` option)."""
 
     score: bool = True
     local: bool = False
     landmarks: tuple | None = None   # (K, METHOD)
     match: str | None = None
+    pairs: bool = False
+
+    @property
+    def matching(self) -> bool:
+        """Whether shapes are matched (to a template or in listed pairs)."""
+        return self.match is not None or self.pairs
 
     def items(self) -> list[str]:
         """The canonical ``--what`` list (the form stored in the ``params`` column)."""
         out = (["score"] if self.score else []) + (["local"] if self.local else [])
         out += [f"landmarks:{self.landmarks[0]}:{self.landmarks[1]}"] if self.landmarks else []
-        return out + ([f"match:{self.match}"] if self.match else [])
+        return out + ([f"match:{self.match}"] if self.match else []) + (["match"] if self.pairs else [])
 
 
 def parse_what(items) -> What:
-    """``["score", "local", "landmarks:5:fps", "match:T.off"]`` (or one comma-separated string) -> ``What``."""
+    """``["score", "local", "landmarks:5:fps", "match:T.off"]`` (or one comma-separated string) -> ``What``;
+    ``match`` alone: the pairs of the ``pairs`` option."""
     from ..selection import METHODS
 
     if isinstance(items, str):
@@ -64,6 +72,7 @@ def parse_what(items) -> What:
     parts = [p.strip() for item in items for p in str(item).split(",") if p.strip()] or ["score"]
     score = local = False
     landmarks = match = None
+    pairs = False
     for p in parts:
         if p == "score":
             score = True
@@ -79,13 +88,14 @@ def parse_what(items) -> What:
             if landmarks is not None:
                 raise InputError("--what: one landmarks:K:METHOD per batch")
             landmarks = (int(bits[1]), bits[2])
-        elif p.startswith("match:") and p[6:]:
-            if match is not None:
-                raise InputError("--what: one match:TEMPLATE per batch")
-            match = os.path.abspath(p[6:])
+        elif (p.startswith("match:") and p[6:]) or p == "match":
+            if match is not None or pairs:
+                raise InputError("--what: one match:TEMPLATE (or one match, with --pairs) per batch")
+            match, pairs = (os.path.abspath(p[6:]), False) if p != "match" else (None, True)
         else:
-            raise InputError(f"--what {p!r}: choose score, local, landmarks:K:METHOD or match:TEMPLATE")
-    return What(score, local, landmarks, match)
+            raise InputError(f"--what {p!r}: choose score, local, landmarks:K:METHOD, match:TEMPLATE or match "
+                             "(with --pairs)")
+    return What(score, local, landmarks, match, pairs)
 
 
 def with_defaults(options: dict) -> dict:
@@ -94,7 +104,13 @@ def with_defaults(options: dict) -> dict:
     if unknown:
         raise InputError(f"unknown batch option {sorted(unknown)[0]!r}")
     out = {**DEFAULT_OPTIONS, **{k: v for k, v in options.items() if v is not None}}
-    out["what"] = parse_what(out["what"]).items()
+    what = parse_what(out["what"])
+    out["what"] = what.items()
+    if what.pairs != (out["pairs"] is not None):
+        raise InputError("--pairs FILE matches the pairs it lists: give it with --what match (not match:TEMPLATE)"
+                         if out["pairs"] is not None else "--what match needs --pairs FILE (or use match:TEMPLATE)")
+    if out["both_directions"] and not what.matching:
+        raise InputError("--both-directions needs --what match:TEMPLATE or --pairs FILE")
     if out["epsilon"] is not None and out["epsilon"] != COLLECTION:
         out["epsilon"] = check_float(out["epsilon"], "epsilon", lo=0.0)
     return out
@@ -110,10 +126,15 @@ def params_key(options: dict) -> str:
     key = {k: v for k, v in with_defaults(options).items() if k in KEY_OPTIONS}
     if key["epsilon"] is None:  # the default level: the key of the tables written before there was a choice
         del key["epsilon"]
-    if not parse_what(key["what"]).match:  # the key of the tables written before there was matching
+    what = parse_what(key["what"])
+    if not what.matching:  # the key of the tables written before there was matching
         key = {k: v for k, v in key.items() if k not in MATCH_OPTIONS}
     else:
-        key["template"] = content_hash(parse_what(key["what"]).match)
+        del key["pairs"]  # each row's params name its pair (matches.MatchPlan.params), not the list
+        if not key["both_directions"]:  # the key of the tables written before there were two directions
+            del key["both_directions"]
+        if what.match:
+            key["template"] = content_hash(what.match)
         if key["landmark_table"]:
             key["landmark_table"] = content_hash(str(key["landmark_table"]))
     if key.get("symmetry_map"):
@@ -121,12 +142,13 @@ def params_key(options: dict) -> str:
     return json.dumps(key, sort_keys=True, separators=(",", ":"))
 
 
-def shape_row(spec: str, expected_hash: str | None, options: dict, params: str, landmarks=None) -> dict:
+def shape_row(spec: str, expected_hash: str | None, options: dict, params: str, match=None) -> dict:
     """The row of one shape (see ``schema.COLUMNS``); failures go to its ``error`` column.
 
-    ``landmarks``: with ``match:TEMPLATE``, (the template's ``{label: id}``, the shape's
-    ``shapes.landmark_files.landmarks_of``); the map is returned under the key ``"_map"``
-    (the caller writes it and removes it before the row is stored).
+    ``match``: when matching, the shape's ``matches.MatchJob`` (what it is matched with, both sets of
+    landmarks, the directions); the map is returned under the key ``"_map"``, and the second direction's
+    match columns and map under ``"_reverse"`` (the caller writes the maps and splits the row,
+    ``matches.MatchPlan.rows_of``, before the rows are stored).
     """
     row = schema.empty_row()
     row.update(file=spec, content_hash=expected_hash, params=params, version=__version__, worker=worker_name())
@@ -134,7 +156,7 @@ def shape_row(spec: str, expected_hash: str | None, options: dict, params: str, 
     with PeakMemory() as mem:
         try:
             _check_file(spec, expected_hash)
-            _fill(row, spec, options, landmarks)
+            _fill(row, spec, options, match)
         except ShapecondError as exc:
             row["error"] = _one_line(exc) or "bad input"
         except MemoryError:
@@ -166,7 +188,7 @@ def _check_file(spec: str, expected_hash: str | None) -> None:
                          "(changed since, or another file at the same path)")
 
 
-def _fill(row: dict, spec: str, options: dict, landmarks=None) -> None:
+def _fill(row: dict, spec: str, options: dict, match=None) -> None:
     from .. import api
 
     what = parse_what(options.get("what") or ["score"])
@@ -199,25 +221,32 @@ def _fill(row: dict, spec: str, options: dict, landmarks=None) -> None:
         res = api.landmarks(shape, k, method, scores=True, effort=effort, **kw, **level)
         row.update(landmark_method=method, landmarks=[int(v) for v in res.landmarks],
                    landmark_scores=[math.nan if s is None else float(s) for s in res.scores])
-    if what.match:
-        _match_columns(row, what.match, loaded, landmarks, {**kw, "points": options.get("points"),
-                                                           "matcher": options.get("matcher")})
+    if what.matching:
+        _match_columns(row, match, loaded, {**kw, "points": options.get("points"), "matcher": options.get("matcher")})
 
 
-def _match_columns(row: dict, template: str, shape, landmarks, kw: dict) -> None:
-    """The match columns (``schema.MATCH_COLUMNS``) and ``"_map"``: ``template`` matched to ``shape``."""
+def _match_columns(row: dict, job, shape, kw: dict) -> None:
+    """The match columns (``schema.MATCH_COLUMNS``) and ``"_map"`` of ``job.reference`` matched to ``shape``;
+    with a second direction, ``"_reverse"``: its columns and map (``"_map"``)."""
     from ..api import DEFAULT_POINTS
-    from ..api.collection import DIRECTION, match_to_template
+    from ..api.collection import match_both_ways, match_to_template
 
-    if landmarks is None:
-        raise InputError("matching to a template needs the landmarks of both shapes")
-    row.update(match_template=template, match_direction=DIRECTION)
-    fields, vertex_map = match_to_template(template, shape, *landmarks, matcher=kw["matcher"] or "lh05",
-                                           n_points=kw["points"] or DEFAULT_POINTS, seed=kw["seed"],
-                                           backend=kw["backend"], cache=kw["cache"], force=kw["force"],
-                                           largest_component=kw["largest_component"])
-    row.update(fields)
-    row["_map"] = vertex_map
+    if job is None:
+        raise InputError("matching needs the landmarks of both shapes")
+    row.update(match_template=job.template, match_direction=job.directions[0], match_source=job.reference,
+               match_target=row["file"])
+    options = dict(matcher=kw["matcher"] or "lh05", n_points=kw["points"] or DEFAULT_POINTS, seed=kw["seed"],
+                   backend=kw["backend"], cache=kw["cache"], force=kw["force"],
+                   largest_component=kw["largest_component"], reference=job.reference_words)
+    if len(job.directions) == 1:
+        fields, vertex_map = match_to_template(job.reference, shape, job.reference_lm, job.shape_lm, **options)
+        row.update(fields, _map=vertex_map)
+        return
+    (fields, vertex_map), (back, back_map) = match_both_ways(job.reference, shape, job.reference_lm, job.shape_lm,
+                                                             **options)
+    row.update(fields, _map=vertex_map)
+    row["_reverse"] = {**back, "match_direction": job.directions[1], "match_source": row["file"],
+                       "match_target": job.reference, "_map": back_map}
 
 
 def _score_columns(row: dict, result) -> None:

@@ -5,8 +5,9 @@ the output table (one writer at a time; ``table.Table``), drops the shapes
 whose (file, content hash, parameters) already have a row when resuming, runs
 one ``rows.shape_row`` task per remaining shape through ``parallel.runner``
 (this process, local processes or a Dask cluster), and appends each row as it
-arrives.  With ``match:TEMPLATE`` (``matches``) each row's map is written
-(atomically) before its row, and ``report.html`` is written beside the table.
+arrives.  With ``match:TEMPLATE`` or ``--pairs`` (``matches``) a task is a shape with its
+reference (the template, or a pair's first shape) and gives a row per direction, each row's
+map written (atomically) before it, and ``report.html`` is written beside the table.
 A shape that fails, or whose worker dies, becomes an error row; the batch goes on.
 """
 
@@ -36,9 +37,9 @@ class BatchSummary:
     """What a batch did: counts, timing, the most symmetric shapes, the failures."""
 
     output: str
-    shapes: int
+    shapes: int            # rows of the batch: one per shape (per map when matching)
     scored: int            # rows computed by this run
-    resumed: int           # shapes skipped because they already had a row
+    resumed: int           # rows skipped because they were already in the table
     failed: int            # shapes of this batch whose row holds an error (new or resumed)
     seconds: float
     median_seconds: float | None
@@ -70,7 +71,7 @@ def _failed_row(spec, digest, params, error) -> dict:
     return row
 
 
-def _unreadable_row(spec, params, reason, digest=None) -> dict:
+def _unreadable_row(spec, digest, params, reason) -> dict:
     """The error row of a shape file that this process cannot read (missing, a FIFO, no permission), or
     whose landmarks it cannot read (``matches``)."""
     row = schema.empty_row()
@@ -114,8 +115,9 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
         ``geodesic_backend``, ``seed``, ``largest_component``, ``no_cache``,
         ``target``, ``target_factor``, ``symmetry_map``), ``effort`` and ``epsilon`` (the level of
         δ for every shape in diameters, or "collection": read off the collection, ``api.level.collection_level``);
-        with ``match:TEMPLATE``, ``matcher`` and ``landmark_table`` (a CSV file ``shape,label,vertex``).
-    what : ``score``, ``local``, ``landmarks:K:METHOD``, ``match:TEMPLATE`` (``rows.parse_what``).
+        when matching, ``matcher``, ``landmark_table`` (a CSV file ``shape,label,vertex``) and
+        ``both_directions``; ``pairs``: the pairs list of ``what`` ``match``.
+    what : ``score``, ``local``, ``landmarks:K:METHOD``, ``match:TEMPLATE``, ``match`` (``rows.parse_what``).
     **how : the fields of ``BatchRun`` (``n_jobs``, ``scheduler``, ``resume``, ``overwrite``, ``progress``).
     """
     t0 = time.perf_counter()
@@ -125,24 +127,32 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
     check_where(how.n_jobs, how.scheduler)
     specs = expand_inputs(inputs)
     plan = plan_matching(specs, options, out)
+    units = plan.units(specs)
     with Table(out, how.mode) as table:
-        hashes = content_hashes(specs)
-        options, source = _level(options, [s for s, (_, why) in zip(specs, hashes) if not why])
-        params = {s: p for s, p in zip(specs, plan.params(params_key(options), specs))}
-        have = {schema.row_key(r): r for r in table.rows}
-        keys = [(s, h, params[s]) for s, (h, _) in zip(specs, hashes)]
-        unreadable = plan.errors | {s: why for s, (_, why) in zip(specs, hashes) if why}
-        todo = [k for k in keys if k not in have]
-        for spec, digest, _ in todo:  # the client cannot read it either: no worker would do better
-            if spec in unreadable:
-                table.append(_unreadable_row(spec, params[spec], unreadable[spec], digest))
-        readable = [k for k in todo if k[0] not in unreadable]
-        where = (_score(table, readable, options, how, plan) if readable
+        hashes = dict(zip(specs, content_hashes(specs)))
+        options, source = _level(options, [s for s in specs if not hashes[s][1]])
+        base = params_key(options)
+        params = [plan.params(base, u, {s: h for s, (h, _) in hashes.items()}) for u in units]
+        keys = [[(u[0], hashes[u[0]][0], p) for p in ps] for u, ps in zip(units, params)]
+        have = {schema.row_key(r) for r in table.rows}
+        unreadable = plan.errors | {s: why for s, (_, why) in hashes.items() if why}
+        todo = [i for i, ks in enumerate(keys) if any(k not in have for k in ks)]
+        readable = []
+        for i in todo:  # the client cannot read it either: no worker would do better
+            why = plan.unit_error(units[i], unreadable)
+            if why is None:
+                readable.append(i)
+                continue
+            for key in keys[i]:
+                if key not in have:
+                    table.append(_unreadable_row(*key, why))
+        where = (_score(table, [(units[i], keys[i]) for i in readable], options, how, plan) if readable
                  else "this process" if todo else "nothing to do")
         done = {schema.row_key(r): r for r in table.rows}
-        batch_rows = [done[k] for k in keys]
-    summary = _summary(str(out), batch_rows, len(todo), len(specs) - len(todo), time.perf_counter() - t0, where)
-    if plan.template:
+        batch_rows = [done[k] for ks in keys for k in ks]
+    new = sum(k not in have for ks in keys for k in ks)
+    summary = _summary(str(out), batch_rows, new, len(batch_rows) - new, time.perf_counter() - t0, where)
+    if plan.active:
         summary = replace(summary, annotate_more=_annotate_more(batch_rows),
                           report=_short(str(write_report(out, batch_rows))))
     return replace(summary, epsilon=options["epsilon"], epsilon_source=source or summary.epsilon_source)
@@ -155,7 +165,9 @@ def _annotate_more(rows) -> list[dict]:
     bad = sorted((r for r in rows if r["error"] is None and r["bar"] is not None and r["bar"] > ANNOTATE_MORE),
                  key=lambda r: (-r["bar"], r["file"]))
     return [{"file": _short(r["file"]), "bar": r["bar"], "source_id": r["suggest_source_id"],
-             "image_id": r["suggest_image_id"], "bar_after": r["suggest_bar_after"]} for r in bad]
+             "image_id": r["suggest_image_id"], "bar_after": r["suggest_bar_after"],
+             "direction": r["match_direction"], "source": _short(r["match_source"] or r["file"]),
+             "cycle_error": r["cycle_error"]} for r in bad]
 
 
 def _level(options: dict, readable: list) -> tuple[dict, str | None]:
@@ -180,18 +192,22 @@ def _collection_level(specs: list, options: dict):
 
 
 def _score(table, todo, options, how: BatchRun, plan: MatchPlan) -> str:
+    """Run the tasks ``todo`` ((unit, its row keys)) and append their rows; the runner's label."""
     from tqdm import tqdm
 
-    tasks = [(shape_row, (spec, digest, options, params), plan.task_kwargs(spec)) for spec, digest, params in todo]
+    tasks = [(shape_row, (unit[0], keys[0][1], options, keys[0][2]), plan.task_kwargs(unit)) for unit, keys in todo]
     failed = 0
+    have = {schema.row_key(r) for r in table.rows}
     with runner(how.n_jobs, how.scheduler) as run, \
             tqdm(total=len(tasks), desc="scoring", unit="shape", disable=not how.progress) as bar:
         for i, row, error in run.iter_tasks(tasks):
-            if error is not None:
-                row = _failed_row(*todo[i], error)
-            plan.write_map(row)
-            table.append(row)
-            failed += row["error"] is not None
+            unit, keys = todo[i]
+            rows = ([_failed_row(*key, error) for key in keys] if error is not None
+                    else plan.rows_of(row, unit, [key[2] for key in keys]))
+            for r in rows:
+                if schema.row_key(r) not in have:  # a task rerun after a kill between its rows
+                    table.append(r)
+                failed += r["error"] is not None
             bar.set_postfix(failed=failed, refresh=False)
             bar.update(1)
         return run.label
@@ -233,8 +249,10 @@ def format_summary(s: BatchSummary) -> str:
         lines += [f"  {num(r['sigma_hat']):>8}  {r['resolution'] or '-':28s} {r['file']}" for r in s.most_symmetric]
     if s.report:
         lines.append(f"report      {s.report}: {len(s.annotate_more)} maps say annotate more (bar > 0.05 sqrt(area))")
-        lines += [f"  {num(r['bar']):>8}  {r['file']}: next template vertex {r['source_id']} "
-                  f"(image {r['image_id']}), bar after {num(r['bar_after'])}" for r in s.annotate_more[:SUMMARY_TOP]]
+        lines += [f"  {num(r['bar']):>8}  {r['file']}" + ("" if r["direction"] == "template to shape"
+                                                       else f" ({r['direction']}, from {r['source']})")
+                  + f": next source vertex {r['source_id']} (image {r['image_id']}), bar after {num(r['bar_after'])}"
+                  for r in s.annotate_more[:SUMMARY_TOP]]
     if s.failures:
         lines.append(f"failed ({s.failed}; the first {len(s.failures)}):" if s.failed > len(s.failures)
                      else "failed:")

@@ -80,17 +80,26 @@ SCALE_AWARE_COLUMNS: tuple = (
 MATCH_COLUMNS: tuple = (
     Column("match_template", "string", "absolute path of the template matched to the shape"),
     Column("match_direction", "string", "'template to shape': the map gives the shape's vertex id of each "
-                                        "template vertex id"),
+                                        "template vertex id; 'shape to template' (--both-directions) the "
+                                        "other way; with --pairs 'first to second' or 'second to first' "
+                                        "(the shapes of a listed line)"),
     Column("map_file", "string", "the map's file (maps/NAME.txt beside the table; one shape id a line)"),
     Column("landmark_pairs", "int64", "landmark pairs used: the labels the shape shares with the template"),
     Column("landmark_labels", "string", "those labels, in the template's order, joined by ' '"),
-    Column("bar", "float64", "the map's error bar: mean error it may have, in sqrt(area) of the template; "
-                             "above 0.05 the report says 'annotate more'"),
+    Column("bar", "float64", "the map's error bar: mean error it may have, in sqrt(area) of the map's source "
+                             "(the template, template to shape); above 0.05 the report says 'annotate more'"),
     Column("bar_epsilon", "float64", "the distortion level ε of the bar (sqrt(area))"),
     Column("bar_epsilon_hat", "float64", "ε̂, the map's own RMS distortion (sqrt(area))"),
-    Column("suggest_source_id", "int64", "the next landmark to annotate: template vertex id"),
-    Column("suggest_image_id", "int64", "its provisional image under the map: shape vertex id"),
+    Column("suggest_source_id", "int64", "the next landmark to annotate: vertex id on the map's source "
+                                         "(the template, template to shape)"),
+    Column("suggest_image_id", "int64", "its provisional image under the map: vertex id on the map's target"),
     Column("suggest_bar_after", "float64", "the bar expected once that landmark is added"),
+    Column("match_source", "string", "the map's source: the template, the shape, or a shape of a listed pair"),
+    Column("match_target", "string", "the map's target"),
+    Column("cycle_error", "float64", "with both directions: mean geodesic distance on the source's samples "
+                                     "between each sample and its image under this map then the opposite "
+                                     "one (source -> target -> source), sqrt(area) of the source; "
+                                     "missing otherwise"),
 )
 
 ALL_COLUMNS = COLUMNS + SCALE_AWARE_COLUMNS + MATCH_COLUMNS

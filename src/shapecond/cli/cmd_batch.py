@@ -35,6 +35,12 @@ EXIT_SOME_FAILED = 3
 @click.option("--landmarks", "landmark_table", type=click.Path(dir_okay=False), default=None,
               help="match:TEMPLATE: a CSV file with columns shape,label,vertex (0-based ids) instead of a "
                    "NAME.lmk file (lines 'LABEL VERTEX_ID') beside each shape.")
+@click.option("--pairs", "pairs_file", type=click.Path(dir_okay=False), default=None,
+              help="Match the pairs this file lists (two shape names a line, the first matched to the second, "
+                   "'#' comments) instead of a template to every shape (--what match, the default with --pairs).")
+@click.option("--both-directions", "both_directions", is_flag=True,
+              help="Matching: each map both ways (template -> shape and shape -> template, or both ways of "
+                   "each pair), both in maps/ with names saying the direction, and their cycle_error.")
 @click.option("--epsilon", type=Float(0.0), default=None,
               help="Distortion level ε of δ(ε) for every shape, RMS, in diameters [default: each shape's median "
                    "sample spacing].")
@@ -55,7 +61,8 @@ def command(inputs, out, what, as_json, **kw):
     One row per shape with info's counts and problems, the global score, and on
     request the local score and landmarks, or the map from a template (match:TEMPLATE:
     template -> shape, landmarks paired by label, the error bar and the next landmark
-    to annotate); a shape that fails gets an error row and the batch goes on.  Exit
+    to annotate), or of the pairs --pairs lists, one row per map; a shape that fails
+    gets an error row and the batch goes on.  Exit
     status 0 when every shape was scored, 3 when some failed.
     """
     if kw["resume"] and kw["overwrite"]:
@@ -63,7 +70,11 @@ def command(inputs, out, what, as_json, **kw):
     if kw["epsilon"] is not None and kw["epsilon_collection"]:
         raise InputError("give --epsilon or --epsilon-from-collection, not both")
     options = pop_shape_options(kw)
-    options.update(effort=kw["effort"], matcher=kw["matcher"], landmark_table=kw["landmark_table"])
+    options.update(effort=kw["effort"], matcher=kw["matcher"], landmark_table=kw["landmark_table"],
+                   pairs=kw["pairs_file"], both_directions=kw["both_directions"])
+    source = click.get_current_context().get_parameter_source("what")
+    if kw["pairs_file"] is not None and source == click.core.ParameterSource.DEFAULT:  # --pairs says what to do
+        what = ("match",)
     options["epsilon"] = "collection" if kw["epsilon_collection"] else kw["epsilon"]
     summary = run_batch(inputs, out, options, what=what, n_jobs=kw["jobs"], scheduler=kw["scheduler"],
                         resume=kw["resume"], overwrite=kw["overwrite"], progress=progress_enabled())
