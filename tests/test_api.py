@@ -162,14 +162,24 @@ def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
     assert code == 0 and json.loads(out)["n_points"] == 12
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("scale", [1e-30, 1e20])
-def test_match_is_scale_free(scale):
-    """The same dense map for a mesh pair and its copy scaled by 1e-30 or 1e20."""
+SCALE_FREE_LANDMARKS = [0, 600, 1200, 1800]
+
+
+@pytest.fixture(scope="module")
+def unscaled_match():
+    """A mesh pair and its dense map at the file's own scale (computed once for both scales below)."""
     src = sc.load("demo:animal:delta=0.1,resolution=0.05")
     tgt = sc.load("demo:animal:delta=0.3,resolution=0.05")
-    lm = [0, 600, 1200, 1800]
-    ref = sc.match((src.vertices, src.faces), (tgt.vertices, tgt.faces), lm, lm, n_points=60, cache=False)
+    lm = SCALE_FREE_LANDMARKS
+    return src, tgt, sc.match((src.vertices, src.faces), (tgt.vertices, tgt.faces), lm, lm, n_points=60, cache=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scale", [1e-30, 1e20])
+def test_match_is_scale_free(unscaled_match, scale):
+    """The same dense map for a mesh pair and its copy scaled by 1e-30 or 1e20."""
+    src, tgt, ref = unscaled_match
+    lm = SCALE_FREE_LANDMARKS
     got = sc.match((src.vertices * scale, src.faces), (tgt.vertices * scale, tgt.faces), lm, lm, n_points=60,
                    cache=False)
     assert np.mean(got.map == ref.map) > 0.999  # distance rows are float32: ties may round apart
