@@ -92,7 +92,7 @@ def test_every_function_takes_a_trimesh_a_tuple_and_a_mesh_with_an_unreferenced_
         assert loc.landmarks == (1, 2)
         hm = sc.heatmap(x, n_points=12, cache=False)
         assert hm.values.shape == (12,) and hm.best in set(hm.samples)
-        m = sc.match(x, x, [1, 5, 9], [1, 5, 9], n_points=20, cache=False)
+        m = sc.match(x, x, [1, 5, 9], [1, 5, 9], n_points=20)  # one Laplace basis for both forms (session cache)
         assert m.map.shape == (g.n_vertices + 1,) and m.map[0] == -1 and m.map[1] == 1
         with pytest.raises(InputError, match="not a vertex"):
             sc.local_score(x, [0])
@@ -104,7 +104,7 @@ def test_results_serialise_to_json_and_print_readably(tmp_path):
     problem = sc.SymmetryProblem(shape, 20, cache=False)
     results = [sc.score(shape, 20, cache=False), problem.score(), problem.heatmap(), problem.landmarks(2),
                sc.local_score("demo:sphere:subdivisions=1"),
-               sc.match(shape, shape, [0, 50], [0, 50], n_points=20, cache=False),
+               sc.match(shape, shape, [0, 50], [0, 50], n_points=20),  # one Laplace basis (session cache)
                sc.score("demo:sphere:subdivisions=1", 8, cache=False)]
     for r in results:
         text = json.dumps(r.to_dict(), allow_nan=False)
