@@ -24,11 +24,19 @@ def _readme_example() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
-@pytest.mark.parametrize("form", ["path", "trimesh", "(V, F)"])
-def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(tmp_path, form):
+@pytest.fixture(scope="module")
+def readme_shape(tmp_path_factory):
+    """The README example's shape as a file, and its score read from that file (the reference of every
+    input form below, computed once)."""
     g = sc.load("demo:animal:delta=0.2,resolution=0.06")
-    path = tmp_path / "animal.off"
+    path = tmp_path_factory.mktemp("readme") / "animal.off"
     write_mesh(path, g.vertices, g.faces)
+    return g, path, sc.score(str(path), n_points=24)
+
+
+@pytest.mark.parametrize("form", ["path", "trimesh", "(V, F)"])
+def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(readme_shape, form):
+    g, path, ref = readme_shape
     shapes = {"path": str(path), "trimesh": trimesh.Trimesh(g.vertices, g.faces, process=False),
               "(V, F)": (g.vertices, g.faces)}
     code = _readme_example().replace('"cat0.off"', "SHAPE").replace("n_points=400", "n_points=24")
@@ -37,7 +45,6 @@ def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(tmp_path, form):
     result, marks = scope["result"], scope["marks"]
     assert result.verdict and result.sigma[0] > 0 and len(marks.landmarks) == 5
     assert all(0 <= v < g.n_vertices for v in marks.landmarks)
-    ref = sc.score(str(path), n_points=24)
     assert result.sigma == ref.sigma and np.array_equal(result.witness_ids, ref.witness_ids)
 
 
