@@ -24,11 +24,19 @@ def _readme_example() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
-@pytest.mark.parametrize("form", ["path", "trimesh", "(V, F)"])
-def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(tmp_path, form):
+@pytest.fixture(scope="module")
+def readme_shape(tmp_path_factory):
+    """The README example's shape as a file, and its score read from that file (the reference of every
+    input form below, computed once)."""
     g = sc.load("demo:animal:delta=0.2,resolution=0.06")
-    path = tmp_path / "animal.off"
+    path = tmp_path_factory.mktemp("readme") / "animal.off"
     write_mesh(path, g.vertices, g.faces)
+    return g, path, sc.score(str(path), n_points=24)
+
+
+@pytest.mark.parametrize("form", ["path", "trimesh", "(V, F)"])
+def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(readme_shape, form):
+    g, path, ref = readme_shape
     shapes = {"path": str(path), "trimesh": trimesh.Trimesh(g.vertices, g.faces, process=False),
               "(V, F)": (g.vertices, g.faces)}
     code = _readme_example().replace('"cat0.off"', "SHAPE").replace("n_points=400", "n_points=24")
@@ -37,7 +45,6 @@ def test_readme_example_runs_on_a_path_a_trimesh_and_arrays(tmp_path, form):
     result, marks = scope["result"], scope["marks"]
     assert result.verdict and result.sigma[0] > 0 and len(marks.landmarks) == 5
     assert all(0 <= v < g.n_vertices for v in marks.landmarks)
-    ref = sc.score(str(path), n_points=24)
     assert result.sigma == ref.sigma and np.array_equal(result.witness_ids, ref.witness_ids)
 
 
@@ -92,7 +99,7 @@ def test_every_function_takes_a_trimesh_a_tuple_and_a_mesh_with_an_unreferenced_
         assert loc.landmarks == (1, 2)
         hm = sc.heatmap(x, n_points=12, cache=False)
         assert hm.values.shape == (12,) and hm.best in set(hm.samples)
-        m = sc.match(x, x, [1, 5, 9], [1, 5, 9], n_points=20, cache=False)
+        m = sc.match(x, x, [1, 5, 9], [1, 5, 9], n_points=20)  # one Laplace basis for both forms (session cache)
         assert m.map.shape == (g.n_vertices + 1,) and m.map[0] == -1 and m.map[1] == 1
         with pytest.raises(InputError, match="not a vertex"):
             sc.local_score(x, [0])
@@ -104,7 +111,7 @@ def test_results_serialise_to_json_and_print_readably(tmp_path):
     problem = sc.SymmetryProblem(shape, 20, cache=False)
     results = [sc.score(shape, 20, cache=False), problem.score(), problem.heatmap(), problem.landmarks(2),
                sc.local_score("demo:sphere:subdivisions=1"),
-               sc.match(shape, shape, [0, 50], [0, 50], n_points=20, cache=False),
+               sc.match(shape, shape, [0, 50], [0, 50], n_points=20),  # one Laplace basis (session cache)
                sc.score("demo:sphere:subdivisions=1", 8, cache=False)]
     for r in results:
         text = json.dumps(r.to_dict(), allow_nan=False)
@@ -162,14 +169,24 @@ def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
     assert code == 0 and json.loads(out)["n_points"] == 12
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("scale", [1e-30, 1e20])
-def test_match_is_scale_free(scale):
-    """The same dense map for a mesh pair and its copy scaled by 1e-30 or 1e20."""
+SCALE_FREE_LANDMARKS = [0, 600, 1200, 1800]
+
+
+@pytest.fixture(scope="module")
+def unscaled_match():
+    """A mesh pair and its dense map at the file's own scale (computed once for both scales below)."""
     src = sc.load("demo:animal:delta=0.1,resolution=0.05")
     tgt = sc.load("demo:animal:delta=0.3,resolution=0.05")
-    lm = [0, 600, 1200, 1800]
-    ref = sc.match((src.vertices, src.faces), (tgt.vertices, tgt.faces), lm, lm, n_points=60, cache=False)
+    lm = SCALE_FREE_LANDMARKS
+    return src, tgt, sc.match((src.vertices, src.faces), (tgt.vertices, tgt.faces), lm, lm, n_points=60, cache=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scale", [1e-30, 1e20])
+def test_match_is_scale_free(unscaled_match, scale):
+    """The same dense map for a mesh pair and its copy scaled by 1e-30 or 1e20."""
+    src, tgt, ref = unscaled_match
+    lm = SCALE_FREE_LANDMARKS
     got = sc.match((src.vertices * scale, src.faces), (tgt.vertices * scale, tgt.faces), lm, lm, n_points=60,
                    cache=False)
     assert np.mean(got.map == ref.map) > 0.999  # distance rows are float32: ties may round apart

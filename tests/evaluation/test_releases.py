@@ -70,7 +70,7 @@ def test_a_pairs_list_groups_the_pairs_by_source_across_classes(tmp_path):
 @pytest.mark.slow
 def test_the_listed_pairs_are_evaluated_with_flips_and_the_pooled_table(tmp_path):
     _flat(tmp_path / "vtx_5k")
-    ev = evaluate_dataset(tmp_path, methods=("fps",), matchers=("zoomout",), n_points=60, cache=False,
+    ev = evaluate_dataset(tmp_path, methods=("fps",), matchers=("zoomout",), n_points=60,
                           pairs=(("strip0", "plate2"), ("plate1", "strip9")), n_landmarks=4, counts=(3,),
                           error_bars=False, scores=False)
     assert all(d["scores"] == {} and d["scale"] == {} for d in ev.landmarks)   # the matchings alone

@@ -59,7 +59,7 @@ def test_a_corres_folder_makes_a_remeshed_class(remeshed):
 
 @pytest.mark.slow
 def test_dense_maps_between_differently_meshed_strips_err_below_a_vertex_spacing(remeshed):
-    ev = evaluate_dataset(remeshed, methods=("fps",), matchers=("lh05", "zoomout"), n_points=60, cache=False)
+    ev = evaluate_dataset(remeshed, methods=("fps",), matchers=("lh05", "zoomout"), n_points=60)
     assert ev.settings["protocols"] == ["remeshed"]
     # 2 targets x counts {3, 10} x 2 matchers
     assert len(ev.records) == 8 and {r.protocol for r in ev.records} == {"remeshed"}

@@ -45,13 +45,28 @@ def pair():
     return src, uv_s, tgt, uv_t, ls, lt
 
 
+@pytest.fixture(scope="module")
+def matched(pair):
+    """``matched(matcher, dense)``: the pair's match with these settings, computed once for the tests
+    below (several of them check the same match); the Laplace bases come from the session's cache."""
+    src, _, tgt, _, ls, lt = pair
+    done = {}
+
+    def get(matcher, dense):
+        if (matcher, dense) not in done:
+            done[matcher, dense] = match_shapes(src, tgt, ls, lt, MatchOptions(matcher=matcher, n_points=120,
+                                                                               dense=dense))
+        return done[matcher, dense]
+    return get
+
+
 @pytest.mark.parametrize("matcher, dense", [pytest.param("lh05", "zoomout", marks=pytest.mark.slow),
                                            pytest.param("faq", "zoomout", marks=pytest.mark.slow),
                                            pytest.param("zoomout", "zoomout", marks=pytest.mark.slow),
                                            ("lh05", "distances"), ("faq", "nearest")])
-def test_bent_copy_is_matched_end_to_end(pair, matcher, dense):
+def test_bent_copy_is_matched_end_to_end(pair, matched, matcher, dense):
     src, uv_s, tgt, uv_t, ls, lt = pair
-    m = match_shapes(src, tgt, ls, lt, MatchOptions(matcher=matcher, n_points=120, dense=dense, cache=False))
+    m = matched(matcher, dense)
     assert m.vertex_map.shape == (src.n_vertices,)
     assert list(m.vertex_map[ls]) == list(lt)
     err = np.linalg.norm(uv_t[m.vertex_map] - uv_s, axis=1)   # geodesic = flat distance
@@ -62,11 +77,11 @@ def test_bent_copy_is_matched_end_to_end(pair, matcher, dense):
     assert flipped.mean() > 3 * err.mean()
 
 
-def test_zoomout_beats_the_distance_extension_which_beats_nearest_sample(pair):
+def test_zoomout_beats_the_distance_extension_which_beats_nearest_sample(pair, matched):
     src, uv_s, tgt, uv_t, ls, lt = pair
     errs = {}
     for dense in ("nearest", "distances", "zoomout"):
-        m = match_shapes(src, tgt, ls, lt, MatchOptions(matcher="faq", n_points=120, dense=dense, cache=False))
+        m = matched("faq", dense)
         errs[dense] = np.linalg.norm(uv_t[m.vertex_map] - uv_s, axis=1).mean()
     assert errs["zoomout"] < errs["distances"] < errs["nearest"], errs
 

@@ -55,7 +55,8 @@ def test_a_region_carried_elsewhere_is_suggested_first_and_the_bar_does_not_grow
 def test_match_suggests_with_the_error_bar_and_refuses_without_it():
     import shapecond as sc
 
-    r = sc.match("demo:blob", "demo:blob", [0, 100, 200], [0, 100, 200], n_points=40, cache=False, suggest=2)
+    # the second Laplace basis of the blob from the session cache
+    r = sc.match("demo:blob", "demo:blob", [0, 100, 200], [0, 100, 200], n_points=40, suggest=2)
     assert len(r.summary["suggestions"]) == 2 and "click source vertex" in r.summary["verdict"]
     first = r.summary["suggestions"][0]
     assert r.map[first["source_id"]] == first["image_id"]   # the provisional image is the map's

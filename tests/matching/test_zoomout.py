@@ -85,7 +85,7 @@ def test_the_zoomout_matcher_keeps_the_least_distorted_of_its_starts(blob, monke
     from shapecond.matching.pipeline import MatchOptions, _least_distorted, match_landmarks_only
 
     g, _ = blob
-    opts = MatchOptions(matcher="zoomout", n_points=60, cache=False)
+    opts = MatchOptions(matcher="zoomout", n_points=60)  # the blob's Laplace basis once, from the session cache
     right, scrambled = np.arange(g.n_vertices), np.random.default_rng(0).permutation(g.n_vertices)
     lm = np.array([0, 100, 400, 250, 600])
     assert _least_distorted(g, g, [scrambled, right], lm, opts, None)[0] == 1

@@ -316,7 +316,7 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, both_di
     >>> import pathlib, tempfile
     >>> import shapecond as sc
     >>> from shapecond.shapes.io import write_mesh
-    >>> folder, g = pathlib.Path(tempfile.mkdtemp()), sc.load("demo:animal")
+    >>> folder, g = pathlib.Path(tempfile.mkdtemp()), sc.load("demo:animal:resolution=0.08")   # 942 vertices
     >>> for name in ("template", "cat"):
     ...     write_mesh(folder / f"{name}.off", g.vertices, g.faces)
     ...     _ = (folder / f"{name}.lmk").write_text("nose 0\\ntail 100\\npaw 200\\n")

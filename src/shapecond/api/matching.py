@@ -104,8 +104,9 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     Examples
     --------
     >>> import shapecond as sc
-    >>> r = sc.match("demo:animal", "demo:animal", [0, 100, 200], [0, 100, 200], n_points=40, cache=False)
-    >>> r.map.shape[0] == sc.load("demo:animal").n_vertices
+    >>> shape = "demo:animal:resolution=0.08"   # a coarse animal (942 vertices): a quick example
+    >>> r = sc.match(shape, shape, [0, 100, 200], [0, 100, 200], n_points=40, cache=False)
+    >>> r.map.shape[0] == sc.load(shape).n_vertices
     True
     """
     opts, flags = _match_options(matcher, n_points, dense, samples, dict(options))
