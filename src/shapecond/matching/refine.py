@@ -79,7 +79,7 @@ class _Bands(NamedTuple):
     in_s: np.ndarray  # samples whose band gains changed in the last move
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _bands(Ds, Dt, t, lists, kp):
     """The bands of the map ``t`` and their gains; every sample to be scanned."""
     n, m = Ds.shape[0], Dt.shape[0]
@@ -98,7 +98,7 @@ def _bands(Ds, Dt, t, lists, kp):
                   np.zeros(n, dtype=np.int64), np.ones(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _rescan(Ds, Dt, t, lists, isfree, kp, st):
     """The best swap of every dirty sample a: the largest gain ΔF / 2 (module docstring), first in
     band order, over the samples b whose image is in a's band.  The gain of b at T a is read from
@@ -137,7 +137,7 @@ def _rescan(Ds, Dt, t, lists, isfree, kp, st):
                 best_j[a] = j
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _make_swap(Ds, Dt, t, lists, kp, st, ba, bb):
     """Exchange the images of ``ba`` and ``bb``: the band gains of the samples within the kernel's
     support of either (``in_s``) get the terms of the two, their own bands are rebuilt, and every
@@ -179,7 +179,7 @@ def _make_swap(Ds, Dt, t, lists, kp, st, ba, bb):
                 break
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _swap_search(Ds, Dt, t, lists, isfree, kp, max_moves):
     """Best-improvement swaps of neighbouring images; ``t`` updated in place.
 
@@ -265,7 +265,7 @@ def polish(D_source, D_target, t, free, kernel: Kernel, knn=None, k: int = 16,
     return t, float(f)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _select(buf, rank):
     """The ``rank``-th smallest entry of ``buf`` (0-based; Hoare's selection, in place).
 
@@ -292,7 +292,7 @@ def _select(buf, rank):
     return buf[rank]
 
 
-@numba.njit(cache=True, parallel=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", parallel=True, nogil=True)
 def _quantile_cost(Ds, Dt, t, rows, band, anchors, rank):
     """C[i, j] = the rank-th smallest |D_s[x, a] − D_t[y, T a]| over the anchors, x = rows[i], y = band[i, j]."""
     C = np.empty(band.shape)

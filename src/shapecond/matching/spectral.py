@@ -114,7 +114,7 @@ def default_sigma(D_source: np.ndarray, factor: float = 1.0) -> float:
     return float(factor * np.median(off.min(axis=1)))
 
 
-@numba.njit(parallel=True, cache=True)
+@numba.njit(parallel=True, cache=True, error_model="numpy")
 def _affinity_kernel(Ds, Dt, src, tgt, kp, upper):
     """M over every pair of candidates (``src[i] -> tgt[i]``) for the kernel ``kp``, dense, float32.
 
@@ -141,7 +141,7 @@ def _affinity_kernel(Ds, Dt, src, tgt, kp, upper):
     return M
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _sparse_affinity_kernel(out, Ds, Dt, cand, by_source, near, kp):
     """CSR pattern and values of M for a kernel ``kp`` of finite support, in one pass; returns indptr.
 
