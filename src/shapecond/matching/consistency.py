@@ -61,7 +61,7 @@ class Kernel:
                 (SUPPORT * self.radius) ** 2)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _k(d, e, kp):
     """K(d, e) for the kernel ``kp = (τ₀², ρ², 1/(2R)², (2R)²)`` (``Kernel.params``)."""
     t0, r2, iw2, cut2 = kp
@@ -76,7 +76,7 @@ def _k(d, e, kp):
     return u * u * w * w
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _objective(Ds, Dt, t, kp):
     n = Ds.shape[0]
     s = 0.0
@@ -87,7 +87,7 @@ def _objective(Ds, Dt, t, kp):
     return s
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _gain_entry(Ds, Dt, t, x, y, kp):
     """Q[x, y] = Σ_{x' ≠ x} K(D_s[x, x'], D_t[y, T x'])."""
     s = 0.0
@@ -97,7 +97,7 @@ def _gain_entry(Ds, Dt, t, x, y, kp):
     return s
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _gain_row(Ds, Dt, t, x, cols, out, kp):
     """out[j] = Q[x, cols[j]]: the pairs within the kernel's support gathered once."""
     t0, r2, ir2, cut2 = kp
@@ -129,7 +129,7 @@ def _gain_row(Ds, Dt, t, x, cols, out, kp):
         out[j] = s
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, error_model="numpy", parallel=True)
 def _gain_band(Ds, Dt, t, rows, band, kp):
     """Q[rows[i], band[i, j]] (module docstring), one row per thread."""
     Q = np.empty(band.shape)
@@ -151,7 +151,7 @@ def support_lists(D_source, cut2: float) -> np.ndarray:
     return near
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _objective_near(Ds, Dt, t, near, kp):
     """``_objective`` summed over the pairs within the kernel's support (``support_lists``):
     its non-zero terms in its order, so the same value."""
@@ -165,7 +165,7 @@ def _objective_near(Ds, Dt, t, near, kp):
     return s
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _support_terms(Ds, near, kp):
     """The parts of ``K(D_s[b, x'], ·)`` that depend on the source only, over ``near[b]``.
 
@@ -192,7 +192,7 @@ def _support_terms(Ds, near, kp):
     return count, d, den, w
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _gain_near(Dt, t, near, terms, b, y, buf):
     """Q[b, y] summed over ``near[b]`` (``support_lists``): the terms of ``_gain_entry``
     that are not zero, in its order, so the same sum; the source factors ``terms`` from
@@ -226,7 +226,7 @@ def gain(D_source, D_target, t, x: int, y: int, kernel: Kernel) -> float:
                              int(x), int(y), kernel.params()))
 
 
-@numba.njit(cache=True, parallel=True)
+@numba.njit(cache=True, error_model="numpy", parallel=True)
 def _gain_columns(Ds, Dc, t, rows, kp):
     """Q[rows[i], y_j] for every target ``y_j`` of ``Dc[u, j] = D_t[y_j, u]`` (module docstring).
 

@@ -79,26 +79,26 @@ class _Bands(NamedTuple):
     in_s: np.ndarray  # samples whose band gains changed in the last move
 
 
-@numba.njit(cache=True, nogil=True)
 def _bands(Ds, Dt, t, lists, kp):
-    """The bands of the map ``t`` and their gains; every sample to be scanned."""
+    """The bands of the map ``t`` and their gains; every sample to be scanned.
+
+    Plain Python: a cached numba function calling the parallel ``_gain_band`` segfaults
+    when it is loaded from numba's cache after that callee was compiled in another process
+    (numba issue 8578); called from Python, the two are cached separately.
+    """
     n, m = Ds.shape[0], Dt.shape[0]
-    kb = lists.knn.shape[1] + 1
-    B = np.empty((n, kb), dtype=np.int64)
-    for x in range(n):
-        B[x, 0] = t[x]
-        B[x, 1:] = lists.knn[t[x]]
+    B = np.ascontiguousarray(np.concatenate([t[:, None], lists.knn[t]], axis=1), dtype=np.int64)
+    kb = B.shape[1]
     Qb = _gain_band(Ds, Dt, t, np.arange(n), B, kp)
     inv = np.full(m, -1, dtype=np.int64)
-    for x in range(n):
-        inv[t[x]] = x
+    inv[t] = np.arange(n)
     near = lists.near
     return _Bands(B, Qb, inv, _support_terms(Ds, near, kp), np.empty(near.shape[1]), np.zeros(n, dtype=np.int64),
                   np.zeros((n, kb)), np.full((n, kb, 3), -1, dtype=np.int64), np.full(n, -np.inf),
                   np.zeros(n, dtype=np.int64), np.ones(n, dtype=np.bool_), np.zeros(n, dtype=np.bool_))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _rescan(Ds, Dt, t, lists, isfree, kp, st):
     """The best swap of every dirty sample a: the largest gain ΔF / 2 (module docstring), first in
     band order, over the samples b whose image is in a's band.  The gain of b at T a is read from
@@ -137,7 +137,7 @@ def _rescan(Ds, Dt, t, lists, isfree, kp, st):
                 best_j[a] = j
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _make_swap(Ds, Dt, t, lists, kp, st, ba, bb):
     """Exchange the images of ``ba`` and ``bb``: the band gains of the samples within the kernel's
     support of either (``in_s``) get the terms of the two, their own bands are rebuilt, and every
@@ -179,7 +179,6 @@ def _make_swap(Ds, Dt, t, lists, kp, st, ba, bb):
                 break
 
 
-@numba.njit(cache=True, nogil=True)
 def _swap_search(Ds, Dt, t, lists, isfree, kp, max_moves):
     """Best-improvement swaps of neighbouring images; ``t`` updated in place.
 
@@ -191,7 +190,12 @@ def _swap_search(Ds, Dt, t, lists, isfree, kp, max_moves):
     partner among them.  The move chosen is the first of the largest gain in
     ``(a, band)`` order, as a full scan would choose it.  Returns the number of moves.
     """
-    st = _bands(Ds, Dt, t, lists, kp)
+    return _moves(Ds, Dt, t, lists, isfree, kp, _bands(Ds, Dt, t, lists, kp), max_moves)
+
+
+@numba.njit(cache=True, error_model="numpy", nogil=True)
+def _moves(Ds, Dt, t, lists, isfree, kp, st, max_moves):
+    """``_swap_search``'s moves from the bands ``st`` (``_bands``)."""
     moves = 0
     while moves < max_moves:
         _rescan(Ds, Dt, t, lists, isfree, kp, st)
@@ -265,7 +269,7 @@ def polish(D_source, D_target, t, free, kernel: Kernel, knn=None, k: int = 16,
     return t, float(f)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _select(buf, rank):
     """The ``rank``-th smallest entry of ``buf`` (0-based; Hoare's selection, in place).
 
@@ -292,7 +296,7 @@ def _select(buf, rank):
     return buf[rank]
 
 
-@numba.njit(cache=True, parallel=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", parallel=True, nogil=True)
 def _quantile_cost(Ds, Dt, t, rows, band, anchors, rank):
     """C[i, j] = the rank-th smallest |D_s[x, a] − D_t[y, T a]| over the anchors, x = rows[i], y = band[i, j]."""
     C = np.empty(band.shape)

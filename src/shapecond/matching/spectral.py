@@ -114,23 +114,34 @@ def default_sigma(D_source: np.ndarray, factor: float = 1.0) -> float:
     return float(factor * np.median(off.min(axis=1)))
 
 
-@numba.njit(parallel=True, cache=True)
-def _affinity_kernel(Ds, Dt, src, tgt, kp):
-    """M over every pair of candidates (``src[i] -> tgt[i]``) for the kernel ``kp``, dense, float32."""
+@numba.njit(parallel=True, cache=True, error_model="numpy")
+def _affinity_kernel(Ds, Dt, src, tgt, kp, upper):
+    """M over every pair of candidates (``src[i] -> tgt[i]``) for the kernel ``kp``, dense, float32.
+
+    ``upper``: write the upper triangle (``j >= i``) only and leave the rest 0, all that
+    ``principal_eigenvector``'s ``ssymv`` reads of a symmetric ``M`` (half the work).  The
+    entries are ``refine._k``'s, evaluated branch-free (the zero cases selected after the
+    arithmetic) so that the inner loop vectorises: ~3x faster, the same values.
+    """
+    t0, r2, iw2, cut2 = kp
     C = src.size
-    M = np.empty((C, C), dtype=np.float32)
+    M = np.zeros((C, C), dtype=np.float32)  # fresh zero pages: the unwritten half costs nothing
     for i in numba.prange(C):
         x, y = src[i], tgt[i]
-        for j in range(C):
+        ds, dt, out = Ds[x], Dt[y], M[i]
+        for j in range(i if upper else 0, C):
             x2, y2 = src[j], tgt[j]
-            if x == x2 or y == y2:
-                M[i, j] = 0.0
-            else:
-                M[i, j] = R._k(Ds[x, x2], Dt[y, y2], kp)
+            d = ds[x2]
+            d2 = d * d
+            diff = d - dt[y2]
+            u = max(1.0 - diff * diff / (R.SUPPORT * R.SUPPORT * (t0 + r2 * d2)), 0.0)
+            w = 1.0 - d2 * iw2
+            v = u * u * w * w
+            out[j] = 0.0 if (x == x2 or y == y2 or d2 >= cut2) else v
     return M
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, error_model="numpy", nogil=True)
 def _sparse_affinity_kernel(out, Ds, Dt, cand, by_source, near, kp):
     """CSR pattern and values of M for a kernel ``kp`` of finite support, in one pass; returns indptr.
 
@@ -170,7 +181,7 @@ def _sparse_affinity_kernel(out, Ds, Dt, cand, by_source, near, kp):
 
 
 def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 512,
-                    compiled: bool = True):
+                    compiled: bool = True, upper: bool = False):
     """Pairwise affinity ``M`` over the candidates (module docstring, step 2), float32.
 
     ``kernel`` is a ``refine.Kernel`` or a float ``s`` (LH05's kernel of width
@@ -178,6 +189,8 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
     candidate pairs are beyond its support), otherwise a dense array.
     ``compiled=True`` fills ``M`` with a numba kernel (one pass, ~10x faster);
     the NumPy block version (dense) is the reference the tests compare it with.
+    ``upper=True``: a compiled dense ``M`` has its upper triangle only (the rest 0),
+    enough for ``principal_eigenvector`` (``M`` is symmetric) at half the cost.
     """
     kernel = kernel if isinstance(kernel, R.Kernel) else R.Kernel(float(kernel))
     C = cand.size
@@ -200,7 +213,7 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
         raise TooLargeError(
             f"{C} candidates need a {4 * C * C / 2**30:.1f} GB affinity matrix; lower k or N")
     if compiled:
-        return _affinity_kernel(Ds, Dt, src, tgt, kp)
+        return _affinity_kernel(Ds, Dt, src, tgt, kp, upper)
     t0, r2, iw2, cut2 = kp
     M = np.empty((C, C), dtype=np.float32)
     for lo in range(0, C, block):
@@ -223,7 +236,8 @@ def principal_eigenvector(M: np.ndarray, tol: float = 1e-7, max_iter: int = 500,
     float32 ``M`` is multiplied by BLAS ``ssymv`` on its upper triangle: the
     products are memory-bound and read half of ``M`` (measured 1.7x faster at
     C ≈ 8,000, the first LH05 round; the same maps on 120 TOSCA pairs, the
-    vector within 6e-8 of ``M @ v``'s).
+    vector within 6e-8 of ``M @ v``'s), so its lower triangle is never read
+    (``affinity_matrix(..., upper=True)`` suffices).
 
     Returns
     -------
@@ -422,8 +436,8 @@ class _LH05:
         ``start``, a map, in the refined rounds), rounded and completed.  Returns (map,
         (iterations, converged))."""
         Ds, Dt, opts = self.Ds, self.Dt, self.opts
-        M = affinity_matrix(Ds, Dt, cand, kernel)
-        if start is None:
+        M = affinity_matrix(Ds, Dt, cand, kernel, upper=start is None)
+        if start is None:  # dense, float32: ssymv reads the upper triangle only
             v, iters, conv = principal_eigenvector(M, opts.tol, opts.max_iter)
         else:  # local affinities have a small spectral gap: Lanczos, not power iteration
             v, iters, conv = lanczos_perron_vector(M, 0.1 + (start[cand.source] == cand.target))
