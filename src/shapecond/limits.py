@@ -10,6 +10,7 @@ within a small factor, which is all a refusal needs.
 
 from __future__ import annotations
 
+import time
 import warnings
 
 from .errors import TooLargeError
@@ -27,6 +28,35 @@ GEODESIC_COST = {"heat": 5e-7, "fmm": 1.1e-6, "euclidean": 2.5e-8, "exact": 4e-7
 #: Seconds of the default witness search at N = 400 samples, M = 3200 targets
 #: (``search_seconds`` scales it).
 SEARCH_SECONDS_400 = 12.0
+
+
+#: Seconds of each of the exact and LP solves of a score given no time limit of its own.
+SOLVE_SECONDS = 10.0
+
+
+class Deadline:
+    """The seconds left of a time limit that starts when this is made (``None``: no limit).
+
+    Examples
+    --------
+    >>> Deadline(None).left() is None
+    True
+    >>> 0.0 < Deadline(5.0).left() <= 5.0
+    True
+    >>> Deadline(5.0).left(reserve=10.0)
+    0.0
+    """
+
+    def __init__(self, seconds: float | None):
+        self.end = None if seconds is None else time.perf_counter() + float(seconds)
+
+    def left(self, reserve: float = 0.0) -> float | None:
+        """Seconds until the limit less ``reserve`` (at least 0), or None without a limit."""
+        return None if self.end is None else max(0.0, self.end - time.perf_counter() - reserve)
+
+    def passed(self, reserve: float = 0.0) -> bool:
+        """Whether the limit (less ``reserve``) is reached; never without a limit."""
+        return self.end is not None and self.left(reserve) == 0.0
 
 
 class CostWarning(UserWarning):
