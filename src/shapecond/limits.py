@@ -59,6 +59,43 @@ class Deadline:
         return self.end is not None and self.left(reserve) == 0.0
 
 
+#: The local score (``deformation.local_score``): seconds per n^1.5 of building and factorising the
+#: 3n x 3n Hessian and its few smallest eigenpairs, plus a fixed part, reading included (demo:blob, 2.5k-41k vertices,
+#: 9 s at 41k; 73 s at 163k).
+LOCAL_SCORE_COST = (1.0, 1.1e-6)
+#: The local doubt field (``deformation.heatmap``, K = 24 eigenpairs and the modal field): seconds
+#: per n^1.25 (demo:blob: 3.7 s at 10k, 15 s at 41k vertices).
+LOCAL_DOUBT_COST = 2.6e-5
+#: An HTML page's scene (``viz``): seconds per vertex drawn, plus a fixed part.
+HTML_SCENE_COST = (0.5, 2e-5)
+
+
+def local_seconds(n_vertices: int, doubt: bool = False, html: bool = False) -> float:
+    """Estimated seconds of the local score of a mesh of ``n_vertices`` vertices, with its doubt field
+    (``doubt``: the local score with each vertex fixed) and an HTML page of it (``html``).
+
+    Examples
+    --------
+    >>> round(local_seconds(40962))
+    10
+    >>> local_seconds(163842, doubt=True, html=True) > local_seconds(163842) > local_seconds(40962)
+    True
+    """
+    base, per = LOCAL_SCORE_COST
+    s = base + per * n_vertices**1.5
+    if doubt or html:
+        s += LOCAL_DOUBT_COST * n_vertices**1.25
+    if html:
+        s += html_seconds(n_vertices)
+    return s
+
+
+def html_seconds(n_vertices: int) -> float:
+    """Estimated seconds of writing an HTML page whose scene draws ``n_vertices`` vertices."""
+    base, per = HTML_SCENE_COST
+    return base + per * n_vertices
+
+
 class CostWarning(UserWarning):
     """A computation was started although it is estimated to take minutes."""
 

@@ -22,7 +22,7 @@ from ..errors import InputError
 from ..selection import check_method_options, select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
 from ..symmetry.report import score_report
-from .guards import guard_landmarks
+from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
 from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
@@ -92,6 +92,7 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     refuse_unknown(unknown, "local_score")
     t0 = time.perf_counter()
     g = require_mesh(load(x, force=force))
+    guard_local(g.n_vertices, force)
     zero_tol = ZERO_TOL if zero_tol is None else zero_tol
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(g.to_internal(parse_ids(landmarks)), zero_tol=zero_tol, ids=g.ids)
