@@ -90,6 +90,31 @@ def local_seconds(n_vertices: int, doubt: bool = False, html: bool = False) -> f
     return s
 
 
+#: A Laplace basis of k eigenpairs (``shapes.laplace``, ARPACK shift-invert): seconds per shape plus
+#: per vertex and eigenpair (demo:blob, k = 150: 10 s at 2.5k, 38 s at 41k vertices).
+LAPLACE_COST = (8.0, 4.8e-6)
+#: Seconds per (source point x target vertex x basis function) of the dense stage's float32
+#: nearest-neighbour products (``matching.zoomout.nearest_rows``; 7-8e-11 at 2.5k-41k vertices).
+NEAREST_COST = 7.5e-11
+
+
+def dense_stage_seconds(n_source: int, n_target: int, k: int = 150, subsample: int = 10) -> float:
+    """Estimated seconds of the ZoomOut dense stage (``matching.zoomout``) between meshes of
+    ``n_source`` and ``n_target`` vertices with a basis of ``k`` functions: both Laplace bases, the
+    iterations (``subsample`` k source points against every target vertex at k = 20, 30, ..., k) and
+    the final map of every source vertex.
+
+    Examples
+    --------
+    >>> dense_stage_seconds(163842, 163842) > 8 * dense_stage_seconds(40962, 40962) > 0
+    True
+    """
+    base, per = LAPLACE_COST
+    bases = 2 * base + per * (n_source + n_target) * k
+    levels = sum(subsample * j * j for j in range(20, k + 1, 10))
+    return bases + NEAREST_COST * n_target * (levels + n_source * k)
+
+
 def html_seconds(n_vertices: int) -> float:
     """Estimated seconds of writing an HTML page whose scene draws ``n_vertices`` vertices."""
     base, per = HTML_SCENE_COST

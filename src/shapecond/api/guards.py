@@ -17,7 +17,7 @@ import inspect
 
 from ..checks import check_int
 from ..errors import TooLargeError
-from ..limits import (check_cost, geodesic_seconds, human_bytes, lh05_affinity_bytes, local_seconds, metric_bytes,
+from ..limits import (check_cost, dense_stage_seconds, geodesic_seconds, human_bytes, lh05_affinity_bytes, local_seconds, metric_bytes,
                       search_seconds)
 from ..matching.nested import core_size
 from ..matching.spectral import MAX_AFFINITY_BYTES, lh05_match
@@ -65,11 +65,17 @@ def matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, 
 
 
 def guard_match(n_vertices: int, n_points: int, n_landmarks: int, options, force: bool) -> None:
-    """Two shapes' geodesics (2N sources each way) and the matcher's memory (``matcher_bytes``).
+    """Two shapes' geodesics (2N sources each way), the ZoomOut dense stage when it runs
+    (``limits.dense_stage_seconds``: both Laplace bases and the nearest-neighbour products, which
+    dominate at scan resolution) and the matcher's memory (``matcher_bytes``).
 
     ``options``: the ``matching.pipeline.MatchOptions`` of the matching.
     """
-    what = f"matching with {n_points} samples on {n_vertices} vertices ({options.backend} distances)"
+    zoomout = "zoomout" in (options.matcher, options.dense)
+    what = (f"matching with {n_points} samples on {n_vertices} vertices ({options.backend} distances"
+            + (", ZoomOut dense stage)" if zoomout else ")"))
     nbytes = matcher_bytes(options.matcher, n_points, n_landmarks, options.matcher_options, what)
-    check_cost(what, 2 * geodesic_seconds(n_vertices, n_points, options.backend),
-               2 * metric_bytes(n_points, n_vertices) + nbytes, force)
+    seconds = 2 * geodesic_seconds(n_vertices, n_points, options.backend)
+    if zoomout:
+        seconds += dense_stage_seconds(n_vertices, n_vertices)
+    check_cost(what, seconds, 2 * metric_bytes(n_points, n_vertices) + nbytes, force)
