@@ -106,7 +106,7 @@ def dense_stage_seconds(n_source: int, n_target: int, k: int = 150, subsample: i
 
     Examples
     --------
-    >>> dense_stage_seconds(163842, 163842) > 8 * dense_stage_seconds(40962, 40962) > 0
+    >>> dense_stage_seconds(163842, 163842) > 4 * dense_stage_seconds(40962, 40962) > 0
     True
     """
     base, per = LAPLACE_COST
