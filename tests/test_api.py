@@ -239,6 +239,35 @@ def test_a_symmetry_problem_refuses_the_score_settings_sc_score_refuses(bad, nee
     assert str(kept.value) == str(one_off.value) and "0 searches kept" in repr(problem)  # before any work
 
 
+def test_the_zoomout_dense_stage_is_in_the_estimate_before_any_work(monkeypatch):
+    """match --matcher zoomout on 163k vertices estimated 66 s (the geodesics alone) and ran past
+    300 s: the Laplace bases and nearest-neighbour products of the dense stage were not counted."""
+    import warnings
+
+    import shapecond.limits as limits
+    from shapecond.matching import pipeline
+
+    sizes = [2_562, 10_242, 40_962, 163_842]
+    dense = [limits.dense_stage_seconds(n, n) for n in sizes]
+    assert dense == sorted(dense) and dense[-1] > 300 > dense[0] > 0
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("matching started before the cost check")
+
+    monkeypatch.setattr(pipeline, "match_shapes", no_work)
+    monkeypatch.setattr(limits, "WARN_SECONDS", 10.0)
+    shape = "demo:sphere:subdivisions=2"
+    with pytest.raises(AssertionError, match="before the cost check"), warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        sc.match(shape, shape, [0, 5, 11], [0, 5, 11], matcher="zoomout", cache=False)
+    assert any("ZoomOut dense stage) will take about" in str(w.message) for w in said)  # the bases' fixed part
+    said.clear()
+    with pytest.raises(AssertionError), warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        sc.match(shape, shape, [0, 5, 11], [0, 5, 11], dense="nearest", n_points=20, cache=False)
+    assert not any("will take about" in str(w.message) for w in said)  # no dense stage: geodesics only
+
+
 def test_lh05s_affinity_is_in_the_estimate_and_refused_before_the_geodesics(monkeypatch):
     """match cat0 cat0 -n 5000 warned '2 min', computed 33 s at 3.5 GB, then LH05 refused a 37 GB matrix."""
     from shapecond.limits import lh05_affinity_bytes

@@ -10,6 +10,7 @@ within a small factor, which is all a refusal needs.
 
 from __future__ import annotations
 
+import time
 import warnings
 
 from .errors import TooLargeError
@@ -27,6 +28,97 @@ GEODESIC_COST = {"heat": 5e-7, "fmm": 1.1e-6, "euclidean": 2.5e-8, "exact": 4e-7
 #: Seconds of the default witness search at N = 400 samples, M = 3200 targets
 #: (``search_seconds`` scales it).
 SEARCH_SECONDS_400 = 12.0
+
+
+#: Seconds of each of the exact and LP solves of a score given no time limit of its own.
+SOLVE_SECONDS = 10.0
+
+
+class Deadline:
+    """The seconds left of a time limit that starts when this is made (``None``: no limit).
+
+    Examples
+    --------
+    >>> Deadline(None).left() is None
+    True
+    >>> 0.0 < Deadline(5.0).left() <= 5.0
+    True
+    >>> Deadline(5.0).left(reserve=10.0)
+    0.0
+    """
+
+    def __init__(self, seconds: float | None):
+        self.end = None if seconds is None else time.perf_counter() + float(seconds)
+
+    def left(self, reserve: float = 0.0) -> float | None:
+        """Seconds until the limit less ``reserve`` (at least 0), or None without a limit."""
+        return None if self.end is None else max(0.0, self.end - time.perf_counter() - reserve)
+
+    def passed(self, reserve: float = 0.0) -> bool:
+        """Whether the limit (less ``reserve``) is reached; never without a limit."""
+        return self.end is not None and self.left(reserve) == 0.0
+
+
+#: The local score (``deformation.local_score``): seconds per n^1.5 of building and factorising the
+#: 3n x 3n Hessian and its few smallest eigenpairs, plus a fixed part, reading included (demo:blob, 2.5k-41k vertices,
+#: 9 s at 41k; 73 s at 163k).
+LOCAL_SCORE_COST = (1.0, 1.1e-6)
+#: The local doubt field (``deformation.heatmap``, K = 24 eigenpairs and the modal field): seconds
+#: per n^1.25 (demo:blob: 3.7 s at 10k, 15 s at 41k vertices).
+LOCAL_DOUBT_COST = 2.6e-5
+#: An HTML page's scene (``viz``): seconds per vertex drawn, plus a fixed part.
+HTML_SCENE_COST = (0.5, 2e-5)
+
+
+def local_seconds(n_vertices: int, doubt: bool = False, html: bool = False) -> float:
+    """Estimated seconds of the local score of a mesh of ``n_vertices`` vertices, with its doubt field
+    (``doubt``: the local score with each vertex fixed) and an HTML page of it (``html``).
+
+    Examples
+    --------
+    >>> round(local_seconds(40962))
+    10
+    >>> local_seconds(163842, doubt=True, html=True) > local_seconds(163842) > local_seconds(40962)
+    True
+    """
+    base, per = LOCAL_SCORE_COST
+    s = base + per * n_vertices**1.5
+    if doubt or html:
+        s += LOCAL_DOUBT_COST * n_vertices**1.25
+    if html:
+        s += html_seconds(n_vertices)
+    return s
+
+
+#: A Laplace basis of k eigenpairs (``shapes.laplace``, ARPACK shift-invert): seconds per shape plus
+#: per vertex and eigenpair (demo:blob, k = 150: 10 s at 2.5k, 38 s at 41k vertices).
+LAPLACE_COST = (8.0, 4.8e-6)
+#: Seconds per (source point x target vertex x basis function) of the dense stage's float32
+#: nearest-neighbour products (``matching.zoomout.nearest_rows``; 7-8e-11 at 2.5k-41k vertices).
+NEAREST_COST = 7.5e-11
+
+
+def dense_stage_seconds(n_source: int, n_target: int, k: int = 150, subsample: int = 10) -> float:
+    """Estimated seconds of the ZoomOut dense stage (``matching.zoomout``) between meshes of
+    ``n_source`` and ``n_target`` vertices with a basis of ``k`` functions: both Laplace bases, the
+    iterations (``subsample`` k source points against every target vertex at k = 20, 30, ..., k) and
+    the final map of every source vertex.
+
+    Examples
+    --------
+    >>> dense_stage_seconds(163842, 163842) > 4 * dense_stage_seconds(40962, 40962) > 0
+    True
+    """
+    base, per = LAPLACE_COST
+    bases = 2 * base + per * (n_source + n_target) * k
+    levels = sum(subsample * j * j for j in range(20, k + 1, 10))
+    return bases + NEAREST_COST * n_target * (levels + n_source * k)
+
+
+def html_seconds(n_vertices: int) -> float:
+    """Estimated seconds of writing an HTML page whose scene draws ``n_vertices`` vertices."""
+    base, per = HTML_SCENE_COST
+    return base + per * n_vertices
 
 
 class CostWarning(UserWarning):

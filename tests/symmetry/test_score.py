@@ -113,3 +113,43 @@ def test_options_object_and_keywords_are_the_same_call_and_the_repr_is_short():
     assert len(repr(a)) < 300 and "array(" not in repr(a) and "N=40" in repr(a)
     with pytest.raises(TypeError):
         symmetry_score(D, exactly=False)
+
+
+def _spread_points(n: int) -> np.ndarray:
+    """Distances of ``n`` random points of an ellipsoidal cloud: no isometry, a slow full search."""
+    from scipy.spatial.distance import cdist
+
+    x = np.random.default_rng(5).normal(size=(n, 3)) * [3.0, 2.0, 1.0]
+    return cdist(x, x)
+
+
+def test_time_limit_bounds_the_whole_score_and_says_it_cut_the_search():
+    """`score -n 400 --exact --time-limit 5` took 29 s: the limit bounded only the exact and LP
+    solves, not the witness search, δ(ε)'s search or the O(N³) spectral starts (8 s at N = 600
+    with limit 2 before)."""
+    import time
+
+    import shapecond as sc
+
+    D = _spread_points(600)
+    sc.score(D[:12, :12], cache=False)  # loads the compiled kernels: not what is timed
+    t0 = time.perf_counter()
+    result = sc.score(D, exact=True, time_limit=2.0, cache=False)
+    seconds = time.perf_counter() - t0
+    out = result.to_dict()
+    assert seconds < 1.5 * 2.0 + 0.5, seconds
+    assert out["time_limited"] is True and any(n.startswith("time limit reached:") for n in out["notes"])
+    assert out["sigma"]["lower"] >= out["swap_floor"] * (1 - 1e-12)  # still a certified lower bound
+
+
+def test_exact_solve_stopped_by_the_limit_reports_no_exact_value():
+    sc = symmetry_score(_spread_points(40), exact=True, time_limit=0.5)
+    assert sc.sigma_exact is None and sc.sigma_upper == math.inf and sc.time_limited
+    assert any(n.startswith("time limit reached: the exact solver") for n in sc.notes)
+    d = sc.to_dict()
+    assert d["sigma"]["exact"] is None and d["time_limited"] is True
+
+
+def test_without_a_time_limit_nothing_is_cut():
+    sc = symmetry_score(_spread_points(30), exact=False)
+    assert not sc.time_limited and sc.to_dict()["time_limited"] is False

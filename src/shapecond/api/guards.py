@@ -5,7 +5,8 @@ The geodesics of a metric shape are guarded where they are computed
 (``shapes.metric``), exact σ and the LP where they are solved (``symmetry.score``),
 the κ probes in ``symmetry.condition``; what is guarded here is the work that
 the interface composes from several searches: CNBS landmark selection, heat
-maps, and a matching's geodesics and LH05 affinity matrix.  Per-unit costs are
+maps, a matching's geodesics and LH05 affinity matrix, and the local score with
+its doubt field and HTML page (``limits.local_seconds``).  Per-unit costs are
 ``limits.search_seconds`` (a default witness search, measured at N = 400) and
 ``limits.geodesic_seconds``.
 """
@@ -16,7 +17,8 @@ import inspect
 
 from ..checks import check_int
 from ..errors import TooLargeError
-from ..limits import check_cost, geodesic_seconds, human_bytes, lh05_affinity_bytes, metric_bytes, search_seconds
+from ..limits import (check_cost, dense_stage_seconds, geodesic_seconds, human_bytes, lh05_affinity_bytes, local_seconds, metric_bytes,
+                      search_seconds)
 from ..matching.nested import core_size
 from ..matching.spectral import MAX_AFFINITY_BYTES, lh05_match
 
@@ -39,6 +41,14 @@ def guard_heat_map(shape, force: bool) -> None:
                search_seconds(shape.n_samples, shape.n_targets, SEARCHES_PER_HEAT_MAP), force=force)
 
 
+def guard_local(n_vertices: int, force: bool, doubt: bool = False, html: bool = False) -> None:
+    """The local score of a mesh of ``n_vertices`` vertices, with its doubt field and HTML page when
+    asked for (``limits.local_seconds``): refused beyond ``limits.MAX_SECONDS``, a warning above a minute."""
+    what = f"the local score of {n_vertices} vertices" + (
+        " with its doubt field" if doubt or html else "") + (" and HTML page" if html else "")
+    check_cost(what, local_seconds(n_vertices, doubt, html), force=force)
+
+
 def matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, what: str) -> float:
     """Memory of the matcher itself (LH05's dense affinity matrix), checked before any geodesic:
     beyond ``spectral.MAX_AFFINITY_BYTES`` the matcher refuses whatever ``force`` says."""
@@ -55,11 +65,17 @@ def matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, 
 
 
 def guard_match(n_vertices: int, n_points: int, n_landmarks: int, options, force: bool) -> None:
-    """Two shapes' geodesics (2N sources each way) and the matcher's memory (``matcher_bytes``).
+    """Two shapes' geodesics (2N sources each way), the ZoomOut dense stage when it runs
+    (``limits.dense_stage_seconds``: both Laplace bases and the nearest-neighbour products, which
+    dominate at scan resolution) and the matcher's memory (``matcher_bytes``).
 
     ``options``: the ``matching.pipeline.MatchOptions`` of the matching.
     """
-    what = f"matching with {n_points} samples on {n_vertices} vertices ({options.backend} distances)"
+    zoomout = "zoomout" in (options.matcher, options.dense)
+    what = (f"matching with {n_points} samples on {n_vertices} vertices ({options.backend} distances"
+            + (", ZoomOut dense stage)" if zoomout else ")"))
     nbytes = matcher_bytes(options.matcher, n_points, n_landmarks, options.matcher_options, what)
-    check_cost(what, 2 * geodesic_seconds(n_vertices, n_points, options.backend),
-               2 * metric_bytes(n_points, n_vertices) + nbytes, force)
+    seconds = 2 * geodesic_seconds(n_vertices, n_points, options.backend)
+    if zoomout:
+        seconds += dense_stage_seconds(n_vertices, n_vertices)
+    check_cost(what, seconds, 2 * metric_bytes(n_points, n_vertices) + nbytes, force)

@@ -76,7 +76,7 @@ class SymmetryProblem:
                                                  effort=self.effort)
         return self._searches[key]
 
-    def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = 10.0,
+    def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = None,
               epsilon: float | None = None, **unknown) -> ScoreResult:
         """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search."""
         refuse_unknown(unknown, "SymmetryProblem.score")

@@ -22,6 +22,7 @@ import numpy as np
 from ..deformation.local_score import LocalScore
 from ..errors import InputError
 from ..jsonable import fmt, jsonable
+from ..limits import check_cost, local_seconds
 from ..selection.result import LandmarkSelection
 from ..symmetry.condition import ProbeResult
 from ..symmetry.report import ScoreReport
@@ -109,6 +110,8 @@ class LocalResult(LocalScore, Pictures):
             raise InputError("this result does not know its mesh; use shapecond.local_score()")
         if "field" not in self._doubt:
             g, problem, zero_tol = self.drawing
+            n = g.n_vertices
+            check_cost(f"the doubt field of {n} vertices", local_seconds(n, doubt=True) - local_seconds(n), force=True)
             self._doubt["field"] = local_heatmap(problem, g.to_internal(self.landmarks), zero_tol=zero_tol)
         return self._doubt["field"]
 

@@ -22,7 +22,7 @@ from ..errors import InputError
 from ..selection import check_method_options, select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
 from ..symmetry.report import score_report
-from .guards import guard_landmarks
+from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
 from .options import EFFORTS, ShapeOptions, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
@@ -33,7 +33,7 @@ DEFAULT_KAPPA_POINTS = 8
 
 
 def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: bool = False,
-          time_limit: float | None = 10.0, effort: str = "default", epsilon: float | None = None,
+          time_limit: float | None = None, effort: str = "default", epsilon: float | None = None,
           **options) -> ScoreResult:
     """How hard ``x`` is to match: the σ bracket (paper Eq. 5), κ bracket, witness, δ(ε) and verdict.
 
@@ -43,7 +43,12 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     n_points, landmarks : samples N and fixed landmarks (input ids); see ``metric_shape``.
     exact : "auto" (exact σ when enumeration is quick), True or False.
     upper : LP upper bound when σ is not exact (N <= 16 free samples).
-    time_limit : seconds for each of the exact and LP solves.
+    time_limit : seconds for the whole score once the distances are known (computing them, or the
+        kernels the first time, is not bounded): the witness search, the exact and LP solves, the
+        resolution report and δ(ε).  When it is reached the searches keep the best maps found (valid
+        bounds that then depend on the machine's speed) and the solves stop unproven;
+        ``to_dict()["time_limited"]`` and a note say so.  None: the searches run in full
+        (deterministic) and each solve gets 10 s.
     effort : "quick", "default" or "thorough" work of the witness search.
     epsilon : distortion level of the scale-aware score δ(ε) (default: the median sample spacing).
     **options : the options of ``metric_shape`` (``seed``, ``force``, ``backend``, ...).
@@ -87,6 +92,7 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     refuse_unknown(unknown, "local_score")
     t0 = time.perf_counter()
     g = require_mesh(load(x, force=force))
+    guard_local(g.n_vertices, force)
     zero_tol = ZERO_TOL if zero_tol is None else zero_tol
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(g.to_internal(parse_ids(landmarks)), zero_tol=zero_tol, ids=g.ids)

@@ -8,7 +8,7 @@ from ..symmetry.score import check_exact
 from .options import EFFORTS
 
 
-def score_settings(*, exact="auto", upper=False, time_limit=10.0, effort="default", epsilon=None, seed=0,
+def score_settings(*, exact="auto", upper=False, time_limit=None, effort="default", epsilon=None, seed=0,
                    force=False) -> ScoreSettings:
     """``ScoreSettings`` from the keyword arguments of a score, each checked (``InputError`` naming it).
 

@@ -6,11 +6,15 @@ Paper Section 5; ``shapecond.deformation``.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import replace
 
 import click
 
-from ..api import local_score
+from ..api import load, local_score
+from ..api.guards import guard_local
+from ..api.inputs import require_mesh
+from ..limits import CostWarning
 from ..checks import parse_ids
 from ..deformation.energy import ALPHA_RANGE, DEFAULT_ALPHA, ENERGIES
 from ..deformation.local_score import ZERO_TOL
@@ -36,7 +40,13 @@ from .common import IDS_HELP, Command, Float, OutputFile, emit_json, force_optio
 def command(input_spec, landmarks, html, heatmap_png, as_json, **o):
     """Local symmetry score sqrt(2 / lambda_min) of the energy Hessian, with its zero modes."""
     t0 = time.perf_counter()
-    result = local_score(input_spec, parse_ids(landmarks), **o)  # alpha, energy, zero_tol, force
+    g = require_mesh(load(input_spec, force=o["force"]))
+    guard_local(g.n_vertices, o["force"], doubt=bool(html or heatmap_png), html=bool(html))  # all of it, up front
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", CostWarning)  # the parts' own estimates: said above already
+        result = local_score(g, parse_ids(landmarks), **o)  # alpha, energy, zero_tol, force
+        if html or heatmap_png:
+            result.doubt()
     if html:
         info(f"wrote {result.to_html(html)}")
     if heatmap_png:

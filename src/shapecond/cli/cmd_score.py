@@ -31,8 +31,12 @@ from .common import (IDS_HELP, Command, Float, OutputFile, api_options, emit_jso
 @click.option("--exact", "exact", is_flag=True, help="Compute σ exactly (enumeration or branch and bound "
               "within --time-limit); by default only when enumeration is quick (N <= 9).")
 @click.option("--upper", is_flag=True, help="LP upper bound when σ is not known exactly (small N only).")
-@click.option("--time-limit", type=Float(0.0, lo_open=True), default=10.0, show_default=True,
-              help="Seconds for each of the exact and LP solves.")
+@click.option("--time-limit", type=Float(0.0, lo_open=True), default=None,
+              help="Seconds for the whole score once the distances are known: the witness search, "
+              "the exact and LP solves and delta(eps) stop at what they have when it is reached, and "
+              "the JSON's time_limited is true (computing geodesics or compiling the kernels the first "
+              "time is not bounded; they warn when long).  [default: none: the searches run in full, "
+              "each solve gets 10 s]")
 @click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
               show_default=True, help="Work spent by the witness search.")
 @click.option("--witness-png", type=OutputFile(), default=None,

@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from shapecond.jsonable import jsonable
-from shapecond.limits import search_seconds
+from shapecond.limits import Deadline, search_seconds
 from shapecond.threads import one_blas_thread
 from shapecond.symmetry import _kernels as K
 from shapecond.symmetry import objective as obj
@@ -113,16 +113,19 @@ def two_levels(n: int, m: int) -> bool:
     return coarse_level(m, n) > n and search_seconds(n, m) >= TWO_LEVEL_SECONDS
 
 
-def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
+def refine(D, n_samples, landmarks, maps, budget=None, time_limit=None) -> SearchResult:
     """Polish each of ``maps`` over all M targets of ``D`` (the witness search's dense local search).
 
     A map over the first M_lo targets is a map over all M (FPS prefix), so the
     maps a search found over Y_lo, each polished once over Y, are the maps of a
     search over Y that starts where Y_lo left off.  ``budget``: the scale-aware
     objective (``witness_search(budget=...)``).  Returns the ``search.KEEP`` best
-    distinct maps, the given ones included, as a ``SearchResult``.
+    distinct maps, the given ones included, as a ``SearchResult``.  ``time_limit``
+    (seconds): once it is reached the maps left are dropped (none is polished when
+    it is reached already).
     """
     t0 = time.perf_counter()
+    deadline = Deadline(time_limit)
     D, n, lm, free = prepare_instance(D, n_samples, landmarks)
     stage = SearchStage(D, n, free, DENSE_K)
     pool = MapPool(D, n, budget, lm)
@@ -132,6 +135,10 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
         t = np.asarray(t, dtype=np.int64)
         first.setdefault(t.tobytes(), t)
     maps = list(first.values())
+    if deadline.passed():  # no time to polish: the maps as they are
+        for t in maps:
+            pool.add(t)
+        return pool.result(time.perf_counter() - t0)
     with one_blas_thread():
         for t, u in stage.polished(maps, mode, s, lm):  # parallel threads, taken in order
             if t.tobytes() in pool.items:  # polished already (the witness is also the first map)
@@ -139,32 +146,36 @@ def refine(D, n_samples, landmarks, maps, budget=None) -> SearchResult:
             pool.add(t)
             if pool.best_value() < math.inf:
                 pool.add(u)
+            if deadline.passed():
+                break
     return pool.result(time.perf_counter() - t0)
 
 
 def coarse_to_fine(D, n_samples, landmarks=(), seed=0, effort="default", starts=(),
-                   budget=None) -> tuple[SearchResult, SearchResult]:
+                   budget=None, time_limit=None) -> tuple[SearchResult, SearchResult]:
     """The witness search over the first M_lo targets, then its maps refined over all M.
 
     Returns ``(fine, coarse)``: the search over Y and the one over Y_lo, the two
     levels the report compares.  Cheaper than a search at each level: the local
     search's moves cost O(N·M) each, and at M_lo most of them are already made.
     On the eight TOSCA null shapes (N = 400, M = 3,200) σ is as high as a full
-    search over Y, or higher, in less time.
+    search over Y, or higher, in less time.  ``time_limit`` (seconds) bounds both levels together.
     """
+    clock = Deadline(time_limit)
     D, n, lm, free = prepare_instance(D, n_samples, landmarks)
     m_lo = coarse_level(D.shape[0], n)
     lo_starts = [t for t in starts if np.max(t) < m_lo]
-    coarse = witness_search(D[:m_lo, :m_lo], n, lm, seed=seed, effort=effort, starts=lo_starts, budget=budget)
+    coarse = witness_search(D[:m_lo, :m_lo], n, lm, seed=seed, effort=effort, starts=lo_starts, budget=budget,
+                            time_limit=clock.left())
     # two starts of the full search that the coarse maps do not replace: one sample sent to a
     # target of the second half right beside it (a thin tip's sample, the witness of horse0), and
     # the reflections of the MDS embedding onto all of Y, which land each mirror image on its
     # nearest target over Y (polished from the coarse mirror instead, σ ended 0.1-1.2 % lower
     # on wolf0, david0 and michael0)
-    extra = [best_reassignment(D, n, free)] if free.size else []
-    if free.size >= 3:
+    extra = [best_reassignment(D, n, free)] if free.size and not clock.passed() else []
+    if free.size >= 3 and not clock.passed():
         extra += reflection_starts(D, n, free, lm, *EFFORTS[effort]["reflect"])
-    fine = refine(D, n, lm, [coarse.witness, *coarse.maps, *starts, *extra], budget=budget)
+    fine = refine(D, n, lm, [coarse.witness, *coarse.maps, *starts, *extra], budget=budget, time_limit=clock.left())
     return fine, coarse
 
 
@@ -183,7 +194,7 @@ def _best_global(D, n, maps, covering_radius):
 
 
 def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landmarks=(), seed=0,
-                      effort="default", score_hi=None, score_lo=None) -> ResolutionReport:
+                      effort="default", score_hi=None, score_lo=None, time_limit=None) -> ResolutionReport:
     """Compare the dense score over the first M/2 targets with the one over all M.
 
     The question is whether the *surface* has a symmetry, so the report judges
@@ -204,20 +215,23 @@ def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landm
     score_lo : an already computed search over the first M/2 targets (the coarse
         level of ``coarse_to_fine``, or ``SymmetryScore.coarse``), reused as is.
     Without either, both levels come from one ``coarse_to_fine`` search.
+    time_limit : seconds for the searches run here (None: no limit).
     """
     m = D_hi.shape[0]
     m_lo = coarse_level(m, n_samples)
     if score_lo is None:
         score_lo = getattr(score_hi, "coarse", None)
     if score_hi is None and score_lo is None and two_levels(n_samples, m):
-        score_hi, score_lo = coarse_to_fine(D_hi, n_samples, landmarks, seed=seed, effort=effort)
+        score_hi, score_lo = coarse_to_fine(D_hi, n_samples, landmarks, seed=seed, effort=effort,
+                                            time_limit=time_limit)
     elif score_hi is None:
-        score_hi = witness_search(D_hi, n_samples, landmarks, seed=seed, effort=effort)
+        score_hi = witness_search(D_hi, n_samples, landmarks, seed=seed, effort=effort, time_limit=time_limit)
     maps_hi = [score_hi.witness] + list(getattr(score_hi, "maps", ()))
     D_lo = D_hi[:m_lo, :m_lo]
     if score_lo is None:
         warm = [t for t in maps_hi if t.max() < m_lo]
-        score_lo = witness_search(D_lo, n_samples, landmarks, seed=seed, effort=effort, starts=warm)
+        score_lo = witness_search(D_lo, n_samples, landmarks, seed=seed, effort=effort, starts=warm,
+                                  time_limit=time_limit)
     maps_lo = [score_lo.witness] + list(score_lo.maps)
     sig_lo, _ = _best_global(D_lo, n_samples, maps_lo, covering_radius)
     # a map over Y_lo is a map over Y: the maps found at M/2 count at M too
@@ -230,8 +244,10 @@ def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landm
                             sig_hi, m_lo, m, change, rms, disp)
 
 
-def resolution_for_shape(shape, landmarks=(), seed=0, effort="default", score=None) -> ResolutionReport | None:
+def resolution_for_shape(shape, landmarks=(), seed=0, effort="default", score=None,
+                         time_limit=None) -> ResolutionReport | None:
     """Resolution report of a dense ``MetricShape`` (None for bijections or a matrix input)."""
     if shape.geometry is None or shape.n_targets <= shape.n_points:
         return None
-    return resolution_report(shape.D, shape.n_points, shape.covering_radius, landmarks, seed, effort, score)
+    return resolution_report(shape.D, shape.n_points, shape.covering_radius, landmarks, seed, effort, score,
+                             time_limit=time_limit)

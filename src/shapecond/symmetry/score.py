@@ -13,8 +13,12 @@ Assembles the three estimators of σ(X) (paper Eq. 5, L² case):
 
 Also reported: the size-free score σ̂ = σ·√N and the bracket of
 the condition number σ_lower ≤ κ ≤ 2·σ_upper + 1 (Theorem 4.1).
-``time_limit`` bounds each of the exact and LP solves; the search always runs
-its full ``effort`` so that the lower bound is deterministic given ``seed``.
+``time_limit`` (seconds) bounds the whole bracket: the search stops at the best
+map found when it is reached (a certified lower bound still, but one that
+depends on the machine's speed) and the exact and LP solves get what is left;
+``time_limited`` and a note say when it cut any of them.  Without it the
+search runs its full ``effort``, so that the lower bound is deterministic
+given ``seed``, and each solve gets ``limits.SOLVE_SECONDS``.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 from shapecond._options import merge_options, with_options
 from shapecond.jsonable import jsonable
 from shapecond.errors import InputError, TooLargeError
-from shapecond.limits import check_cost, search_seconds
+from shapecond.limits import SOLVE_SECONDS, Deadline, check_cost, search_seconds
 from shapecond.symmetry.exact import exact_sigma, map_count
 from shapecond.symmetry.resolution import coarse_to_fine, two_levels
 from shapecond.symmetry.search import best_single_swap, prepare_instance, witness_search
@@ -55,6 +59,7 @@ class SymmetryScore:
     coarse : with dense targets, the search over the first M/2 targets that the
         search over Y was refined from (``resolution.coarse_to_fine``; the
         resolution report's lower level), else None.
+    time_limited : whether a time limit stopped the search or a solve early (a note says which).
     """
 
     sigma_lower: float
@@ -71,6 +76,7 @@ class SymmetryScore:
     sigmas: tuple = ()
     notes: tuple = ()
     coarse: object = field(default=None, repr=False)
+    time_limited: bool = False
 
     def __repr__(self) -> str:
         moved = int(np.sum(np.asarray(self.witness) != np.arange(len(self.witness))))
@@ -107,6 +113,7 @@ class SymmetryScore:
             "swap_floor": self.swap_floor,
             "upper_method": self.upper_method,
             "notes": list(self.notes),
+            "time_limited": self.time_limited,
             "seconds": self.seconds,
         })
 
@@ -134,7 +141,9 @@ class ScoreOptions:
         maps), True (enumeration or branch and bound within ``time_limit``) or False.
     upper : compute the LP upper bound when σ is not known exactly; refused
         above the LP's size limit (then ``sigma_upper = inf`` and a note).
-    time_limit : seconds for each of the exact and LP solves (None: no limit).
+    time_limit : seconds for the whole bracket: the search, then the exact and LP
+        solves in what is left (None: the search runs in full, each solve gets
+        ``limits.SOLVE_SECONDS``).
     seed, effort : passed to ``witness_search``.
     force : run the exact and LP solves even beyond their memory and size limits
         (otherwise they are skipped with a note and the bracket keeps its bounds).
@@ -142,7 +151,7 @@ class ScoreOptions:
 
     exact: object = "auto"
     upper: bool = False
-    time_limit: float | None = 10.0
+    time_limit: float | None = None
     seed: int = 0
     effort: str = "default"
     force: bool = False
@@ -170,50 +179,68 @@ def symmetry_score(D, n_samples=None, landmarks=(), search=None, options=None, *
     """
     opts = merge_options(ScoreOptions, options, kw, "symmetry_score")
     t0 = time.perf_counter()
+    clock = Deadline(opts.time_limit)
     D, n, lm, _ = prepare_instance(D, n_samples, landmarks)
     m = D.shape[0]
     notes = []
-    res, coarse = (search, None) if search is not None else _search(D, n, lm, opts)
+    res, coarse = (search, None) if search is not None else _search(D, n, lm, opts, clock.left())
+    if clock.passed() and res.sigma < math.inf:  # σ = inf is exact: nothing was lost
+        notes.append(f"{LIMITED} the witness search stopped at {opts.time_limit:g} s; its lower bound is "
+                     "the best map found in time")
     floor = best_single_swap(D, n, lm)[0]
     lower, witness = res.sigma, res.witness
     sigma_exact, hi, method = None, math.inf, "none"
     if lower == math.inf:  # a non-identity isometry: σ = inf exactly, nothing to bound
         sigma_exact, hi, method = math.inf, math.inf, "isometry"
     elif _exact_wanted(opts.exact, n, m, lm.size):
-        exact = _exact(D, n, lm, res, opts, notes)
+        exact = _exact(D, n, lm, res, opts, notes, clock)
         if exact is not None:
             sigma_exact, witness = exact
             lower = hi = sigma_exact
             method = "exact"
     if method == "none" and opts.upper and lower != math.inf:
-        hi, method = _lp_upper(D, n, lm, lower, opts, notes)
+        hi, method = _lp_upper(D, n, lm, lower, opts, notes, clock)
     return SymmetryScore(
         sigma_lower=lower, sigma_upper=hi, sigma_exact=sigma_exact, witness=witness, swap_floor=floor,
         n_points=n, n_targets=m, landmarks=tuple(int(v) for v in lm), seconds=time.perf_counter() - t0,
-        upper_method=method, maps=res.maps, sigmas=res.sigmas, notes=tuple(notes), coarse=coarse)
+        upper_method=method, maps=res.maps, sigmas=res.sigmas, notes=tuple(notes), coarse=coarse,
+        time_limited=any(note.startswith(LIMITED) for note in notes))
 
 
-def _search(D, n, lm, opts):
-    """The witness search (over two levels of targets when ``resolution.two_levels``): (the search
-    result, its coarse level or None)."""
+#: How every note saying that a time limit cut the work short begins.
+LIMITED = "time limit reached:"
+
+
+def _search(D, n, lm, opts, time_limit):
+    """The witness search (over two levels of targets when ``resolution.two_levels``) within
+    ``time_limit`` seconds (None: its full effort): (the search result, its coarse level or None)."""
     m = D.shape[0]
-    check_cost(f"the witness search at N = {n}, M = {m}", search_seconds(n, m), force=opts.force)
+    estimate = search_seconds(n, m)
+    check_cost(f"the witness search at N = {n}, M = {m}",
+               estimate if time_limit is None else min(estimate, time_limit), force=opts.force)
     if two_levels(n, m):
-        return coarse_to_fine(D, n, lm, seed=opts.seed, effort=opts.effort)
-    return witness_search(D, n, lm, seed=opts.seed, effort=opts.effort), None
+        return coarse_to_fine(D, n, lm, seed=opts.seed, effort=opts.effort, time_limit=time_limit)
+    return witness_search(D, n, lm, seed=opts.seed, effort=opts.effort, time_limit=time_limit), None
 
 
-def _exact(D, n, lm, res, opts, notes):
+def _solve_seconds(clock):
+    """Seconds for the exact or the LP solve: what is left of the limit, or ``SOLVE_SECONDS``."""
+    left = clock.left()
+    return SOLVE_SECONDS if left is None else left
+
+
+def _exact(D, n, lm, res, opts, notes, clock):
     """``(σ, witness)`` from ``exact.exact_sigma`` warm-started from the search ``res``, or None
     (with a note) when it was refused, did not finish, or came out below the search's witness
     (a map beats the "exact" value: the map is trusted)."""
+    seconds = _solve_seconds(clock)
     try:
-        ex = exact_sigma(D, n, lm, time_limit=opts.time_limit, warm=res, force=opts.force)
+        ex = exact_sigma(D, n, lm, time_limit=seconds, warm=res, force=opts.force)
     except TooLargeError as err:
         notes.append(f"exact σ not attempted: {err}")
         return None
     if not (ex.finished and ex.sigma is not None):
-        notes.append(f"exact solver did not finish within {opts.time_limit} s")
+        notes.append(f"{LIMITED} the exact solver stopped after {seconds:.3g} s before proving σ")
         return None
     if ex.sigma >= res.sigma * (1 - 1e-9):
         return ex.sigma, (res.witness if ex.witness is None else np.asarray(ex.witness, dtype=np.int64))
@@ -221,16 +248,17 @@ def _exact(D, n, lm, res, opts, notes):
     return None
 
 
-def _lp_upper(D, n, lm, lower, opts, notes):
+def _lp_upper(D, n, lm, lower, opts, notes, clock):
     """``(upper, method)`` from the LP relaxation (at least ``lower``), or ``(inf, "none")`` with a
     note when it is refused."""
     from shapecond.symmetry.relax import lp_upper_bound  # highspy: loaded only when an LP bound is asked for
 
+    seconds = _solve_seconds(clock)
     try:
-        lp = lp_upper_bound(D, n, lm, time_limit=opts.time_limit, force=opts.force)
+        lp = lp_upper_bound(D, n, lm, time_limit=seconds, force=opts.force)
     except TooLargeError as err:
         notes.append(f"no upper bound: {err}")
         return math.inf, "none"
     if lp.upper == math.inf and lp.status.startswith("time"):
-        notes.append(f"LP upper bound did not finish within {opts.time_limit} s")
+        notes.append(f"{LIMITED} the LP upper bound stopped after {seconds:.3g} s")
     return max(lp.upper, lower), "lp"

@@ -331,13 +331,14 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
     warm = [S.repair(t, n, D.shape[0], lm) for t in starts]
     s_swap = run.single_swap()
     run.run_all(run.bij, [t for t in warm if t.max() < n])
-    if free.size >= 3:
+    # past late() no start is added to the pool any more: the stages are not even built
+    if free.size >= 3 and not run.late():
         run.spectral()
         s_ref = 1.0 / max(s_swap, 1e-6) ** 2 if math.isfinite(s_swap) else 1.0
-        run.ladder(run.gilmore_lawler(s_ref), s_ref)
-        run.random_starts()
-        run.kicks()
-    if run.dense is not None:
+        for stage in (lambda: run.ladder(run.gilmore_lawler(s_ref), s_ref), run.random_starts, run.kicks):
+            if not run.late():
+                stage()
+    if run.dense is not None and not run.late():
         run.dense_refine([t for t in warm if t.max() >= n])
     return run.pool.result(time.perf_counter() - t_start)
 
@@ -363,6 +364,11 @@ class _SearchRun:
         """Random starts and kicks at least: on small instances, where a local search costs
         microseconds, ``EFFORTS[...]["small"] / n_free²``."""
         return int(self.cfg["small"] / self.free.size**2)
+
+    @property
+    def time_bound(self) -> float | None:
+        """The deadline as a ``time.perf_counter()`` time, None without a time limit."""
+        return None if self.deadline == math.inf else self.deadline
 
     def late(self) -> bool:
         """Past the time limit, or an isometry found (σ = ∞: nothing can beat it)."""
@@ -396,7 +402,7 @@ class _SearchRun:
         """2. Spectral sign-flip starts, the most promising ones polished; without dense targets
         the reflections of the MDS embedding too (with them they are built over Y, step 7)."""
         cfg, bij = self.cfg, self.bij
-        cand = S.spectral_starts(bij.D, self.free, cfg["vectors"], cfg["pairs"])
+        cand = S.spectral_starts(bij.D, self.free, cfg["vectors"], cfg["pairs"], deadline=self.time_bound)
         cand.sort(key=lambda t: -self.pool.value(t)[0])
         self.run_all(bij, cand[: cfg["spectral"]])
         if self.dense is None:
@@ -406,7 +412,7 @@ class _SearchRun:
         """3. Gilmore-Lawler assignment starts over a grid of s around ``s_ref``; the best few
         polished.  Returns all of them, best first."""
         grid = [s_ref * 4.0 ** (1 - j) for j in range(self.cfg["gl"])]
-        cand = S.gilmore_lawler_starts(self.bij.D, self.free, self.lm, grid)
+        cand = S.gilmore_lawler_starts(self.bij.D, self.free, self.lm, grid, deadline=self.time_bound)
         gl_best = sorted(cand, key=lambda t: -self.pool.value(t)[0])
         self.run_all(self.bij, gl_best[: self.cfg["gl_polish"]])
         return gl_best

@@ -33,11 +33,12 @@ import functools
 import hashlib
 import itertools
 import threading
+import time
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
-from shapecond.threads import thread_map
+from shapecond.threads import n_threads, thread_map
 
 
 def swap_map(n: int, a: int, b: int) -> np.ndarray:
@@ -124,20 +125,23 @@ def _memo(f):
     same spectral and Gilmore-Lawler starts (about 50 linear assignments, 0.7 s at N = 400)
     from them; hashing the arguments costs O(N²).  Results are read-only arrays (a list of
     maps comes back as a new list), so no caller can change a remembered one.
+    A keyword ``deadline`` (a ``time.perf_counter()`` time, for the functions that take one) is
+    not part of the key, and a result computed past it (perhaps cut short) is not remembered.
     """
     memo: dict = {}
 
     @functools.wraps(f)
-    def wrapped(*args, **kwargs):
+    def wrapped(*args, deadline=None, **kwargs):
         key = _key((args, tuple(sorted(kwargs.items()))))
         with _memo_lock:
             hit = memo.get(key)
         if hit is None:
-            hit = _read_only(f(*args, **kwargs))
-            with _memo_lock:
-                memo[key] = hit
-                while len(memo) > MEMO_SIZE:
-                    memo.pop(next(iter(memo)))
+            hit = _read_only(f(*args, **kwargs) if deadline is None else f(*args, deadline=deadline, **kwargs))
+            if deadline is None or time.perf_counter() <= deadline:
+                with _memo_lock:
+                    memo[key] = hit
+                    while len(memo) > MEMO_SIZE:
+                        memo.pop(next(iter(memo)))
         return hit if isinstance(hit, np.ndarray) else list(hit)
 
     return wrapped
@@ -175,15 +179,29 @@ def _diffusion(DX: np.ndarray, k: int) -> np.ndarray:
     return phi * np.clip(lam[order], 0.0, None)
 
 
+def _until(f, jobs, deadline) -> list:
+    """``thread_map(f, jobs)`` a chunk of ``n_threads()`` jobs at a time, stopping once the
+    ``time.perf_counter()`` time ``deadline`` (None: none) is past: the results of the jobs done."""
+    if deadline is None:
+        return thread_map(f, jobs)
+    out, k = [], n_threads()
+    for i in range(0, len(jobs), k):
+        if time.perf_counter() > deadline:
+            break
+        out += thread_map(f, jobs[i:i + k])
+    return out
+
+
 @_memo
 def spectral_starts(DX: np.ndarray, free: np.ndarray, n_vectors: int = 10,
-                    n_pairs: int = 5) -> list[np.ndarray]:
+                    n_pairs: int = 5, deadline=None) -> list[np.ndarray]:
     """Sign-flip starts from two embeddings (MDS and diffusion).
 
     For each embedding Φ (n × k, k = n_vectors) and each sign pattern S that
     flips one coordinate, or two among the first ``n_pairs``, the start is the
     bijection maximising Σ_x ⟨Φ_x S, Φ_{T x}⟩ (linear assignment).  Maps equal
-    to the identity are dropped; duplicates are removed.
+    to the identity are dropped; duplicates are removed.  Past ``deadline`` (a
+    ``time.perf_counter()`` time) no more assignment is started.
     """
     n = DX.shape[0]
     k = max(1, min(n_vectors, n - 2))
@@ -196,7 +214,7 @@ def spectral_starts(DX: np.ndarray, free: np.ndarray, n_vectors: int = 10,
         return _assign((phi * sgn) @ phi.T, free, n)
 
     jobs = [(phi, pat) for phi in (classical_mds(DX, k), _diffusion(DX, k)) for pat in patterns]
-    return _distinct(thread_map(start, jobs), n)  # linear assignments release the GIL
+    return _distinct(_until(start, jobs, deadline), n)  # linear assignments release the GIL
 
 
 def _distinct(maps, n: int) -> list[np.ndarray]:
@@ -229,12 +247,13 @@ def gilmore_lawler(DX: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
 
 @_memo
 def gilmore_lawler_starts(DX: np.ndarray, free: np.ndarray, landmarks: np.ndarray,
-                          s_values) -> list[np.ndarray]:
-    """Maps argmax_T Σ_x (D[x,Tx]² − s·GL[x,Tx]) for each s (linear assignments)."""
+                          s_values, deadline=None) -> list[np.ndarray]:
+    """Maps argmax_T Σ_x (D[x,Tx]² − s·GL[x,Tx]) for each s (linear assignments; none started past
+    ``deadline``, a ``time.perf_counter()`` time)."""
     n = DX.shape[0]
     W = DX**2
     GL = gilmore_lawler(DX, landmarks)
-    return _distinct(thread_map(lambda s: _assign(W - s * GL, free, n), list(s_values)), n)
+    return _distinct(_until(lambda s: _assign(W - s * GL, free, n), list(s_values), deadline), n)
 
 
 def _landmark_mds(D: np.ndarray, n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
