@@ -92,22 +92,26 @@ def report(a) -> None:
     runs = [(r.split("=", 1)[0], json.loads(Path(r.split("=", 1)[1]).read_text())) for r in a.run]
     first = runs[0][1]
     pairs = [p for p in first["pairs"] if all(p in d["pairs"] for _, d in runs)]
-    keys = list(first["pairs"][pairs[0]])
-    lines = [f"Machine: {machine()}", "", f"Command: `{command_line()}`", "", a.note or "", "",
+    keys = list(dict.fromkeys(k for _, d in runs for k in d["pairs"][pairs[0]]))
+    lines = ["## Off isometry, where the dense stage ends (bench_dense_stage.py)", "", f"Machine: {machine()}", "", f"Command: `{command_line()}`", "", a.note or "", "",
              f"{first['class']}: {first['null']} matched to {len(pairs)} targets, {first['landmarks']} farthest-point "
              "landmarks with their true images; errors in 10⁻³ sqrt(area): mean / worst, matchings above 50.", "",
              "| matcher | " + " | ".join(label for label, _ in runs) + " |", "|---|" + "---|" * len(runs)]
     for k in keys:
         cells = []
         for _, d in runs:
+            if k not in d["pairs"][pairs[0]]:
+                cells.append("—")
+                continue
             e = np.array([d["pairs"][p][k] for p in pairs])
             cells.append(f"{e.mean():.1f} / {e.max():.0f}, above 50: {int((e > 50).sum())}")
         lines.append(f"| {k} | " + " | ".join(cells) + " |")
     base_label, base = runs[0]
     for label, d in runs[1:]:
-        worse = [f"{p} {k}: {base['pairs'][p][k]:.1f} → {d['pairs'][p][k]:.1f}" for p in pairs for k in keys
+        common = [k for k in keys if k in base["pairs"][pairs[0]] and k in d["pairs"][pairs[0]]]
+        worse = [f"{p} {k}: {base['pairs'][p][k]:.1f} → {d['pairs'][p][k]:.1f}" for p in pairs for k in common
                  if d["pairs"][p][k] > 1.05 * base["pairs"][p][k]]
-        lines += ["", f"{label}: {len(worse)} of {len(pairs) * len(keys)} (pair, matcher) more than 5 % worse than "
+        lines += ["", f"{label}: {len(worse)} of {len(pairs) * len(common)} (pair, matcher) more than 5 % worse than "
                   f"{base_label}" + (": " + "; ".join(worse) if worse else "")]
     write_section(f"dense-stage-{Path(first['dataset']).name}", "\n".join(lines))
 
