@@ -254,7 +254,10 @@ def test_the_zoomout_dense_stage_is_in_the_estimate_before_any_work(monkeypatch)
     def no_work(*args, **kwargs):
         raise AssertionError("matching started before the cost check")
 
+    import shapecond.api.matching as api_matching
+
     monkeypatch.setattr(pipeline, "match_shapes", no_work)
+    monkeypatch.setattr(api_matching, "match_shapes", no_work)  # the name the API calls
     monkeypatch.setattr(limits, "WARN_SECONDS", 10.0)
     shape = "demo:sphere:subdivisions=2"
     with pytest.raises(AssertionError, match="before the cost check"), warnings.catch_warnings(record=True) as said:
