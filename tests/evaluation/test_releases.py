@@ -8,7 +8,7 @@ import pytest
 from shapecond.errors import InputError
 from shapecond.evaluation import evaluate_dataset
 from shapecond.evaluation.datasets import check_layout, find_classes, pair_groups, read_pairs
-from shapecond.evaluation.report import markdown, pooled
+from shapecond.evaluation.report import markdown, pooled, write_report
 from tests.evaluation.test_remeshed import H, W, _strip, _write
 
 
@@ -82,6 +82,9 @@ def test_the_listed_pairs_are_evaluated_with_flips_and_the_pooled_table(tmp_path
     table = pooled(ev.records)
     assert table[("fps", 4, "zoomout")]["n"] == 2 and table[("fps", 4, "zoomout")]["failed"] == 0
     assert "All matchings pooled" in markdown(ev) and "2 listed pairs" in markdown(ev)
+    write_report(ev, tmp_path / "out")  # without scores there is no score axis: no such figure, no failure
+    assert (tmp_path / "out" / "results.json").exists() and (tmp_path / "out" / "report.html").exists()
+    assert not (tmp_path / "out" / "score_vs_error_remeshed.png").exists()
 
 
 def test_bad_releases_and_pairs_are_refused_in_one_line(tmp_path):

@@ -330,17 +330,21 @@ def _plot(ev, protocol, out_dir) -> list[Path]:
         paths.append(p)
     scores = score_table(ev.landmarks)
     errs = mean_errors(ev.records)
+    points = {}
+    for matcher in st["matchers"]:
+        for m in st["methods"]:
+            for (cls, mm, c, mt), e in errs.items():
+                s = scores.get((cls, mm), {}).get(c)
+                if mm == m and mt == matcher and s is not None and math.isfinite(s) and s > 0:
+                    points.setdefault((m, matcher), []).append((s, e))
+    if not points:  # no scores (``scores=False``): no axis to put the errors against
+        return paths
     fig = new_figure(figsize=(5, 4))
     ax = fig.subplots()
     for matcher, marker in zip(st["matchers"], "os^"):
         for m in st["methods"]:
-            xs, ys = [], []
-            for (cls, mm, c, mt), e in errs.items():
-                s = scores.get((cls, mm), {}).get(c)
-                if mm == m and mt == matcher and s is not None and math.isfinite(s):
-                    xs.append(s)
-                    ys.append(e)
-            ax.scatter(xs, ys, marker=marker, label=f"{m} ({matcher})", s=18)
+            xy = np.array(points.get((m, matcher), np.zeros((0, 2))))
+            ax.scatter(xy[:, 0], xy[:, 1], marker=marker, label=f"{m} ({matcher})", s=18)
     ax.set_xscale("log")
     ax.set_xlabel("symmetry score σ with the landmarks fixed")
     ax.set_ylabel("mean error, % of half diameter")
@@ -440,10 +444,10 @@ def write_report(ev, out_dir) -> Path:
     from shapecond.viz.pages import write_evaluation_html
 
     out_dir = Path(out_dir)
+    data = dict(ev.to_dict(), correlation=correlations(by_protocol(ev, protocols(ev)[0])),
+                correlation_by_protocol={p: correlations(by_protocol(ev, p)) for p in protocols(ev)})
+    write_text(out_dir / "results.json", dumps(data, indent=1))  # first: the numbers outlive any figure
     plots = plot(ev, out_dir)
     path = write_text(out_dir / "report.md", markdown(ev, plots))
     write_evaluation_html(ev, out_dir, markdown(ev, plots), null_shapes(ev))
-    data = dict(ev.to_dict(), correlation=correlations(by_protocol(ev, protocols(ev)[0])),
-                correlation_by_protocol={p: correlations(by_protocol(ev, p)) for p in protocols(ev)})
-    write_text(out_dir / "results.json", dumps(data, indent=1))
     return path
