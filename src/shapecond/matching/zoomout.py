@@ -248,21 +248,22 @@ def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarra
 
 def _whitening(X, Y, TS, w, blocks, S) -> list[float]:
     """Scale of every anchor block that whitens it against the spectral block (module docstring):
-    the ratio of their residual RMS per coordinate under the current map ``S → TS`` (mass ``w``)."""
+    the ratio of their residual RMS per coordinate under the current map ``S → TS`` (mass ``w``).
+    Where either residual vanishes (a map that already agrees exactly) there is no ratio to measure,
+    and the block keeps its own scale, 1."""
     spectral = float(w @ np.square(X - Y[TS]).sum(axis=1)) / X.shape[1]
     scales = []
     for a, b in blocks:
         residual = float(w @ np.square(a[S] - b[TS], dtype=np.float64).sum(axis=1)) / a.shape[1]
-        scales.append(math.sqrt(spectral / residual) if residual > 0 else 0.0)
+        scales.append(math.sqrt(spectral / residual) if residual > 0 and spectral > 0 else 1.0)
     return scales
 
 
 def _pointwise(X: np.ndarray, Y: np.ndarray, blocks, scales) -> np.ndarray:
     """Nearest rows of ``[X, c_1 a_1, ...]`` among ``[Y, c_1 b_1, ...]`` for the blocks ``(a_i, b_i)``
-    at scales ``c_i`` (a block at scale 0 is left out)."""
+    at scales ``c_i``."""
     xs, ys = [X.astype(np.float32)], [Y.astype(np.float32)]
     for (a, b), c in zip(blocks, scales):
-        if c > 0:
-            xs.append(np.float32(c) * a)
-            ys.append(np.float32(c) * b)
+        xs.append(np.float32(c) * a)
+        ys.append(np.float32(c) * b)
     return nearest_rows(np.hstack(xs), np.hstack(ys))
