@@ -13,14 +13,12 @@ its doubt field and HTML page (``limits.local_seconds``).  Per-unit costs are
 
 from __future__ import annotations
 
-import inspect
-
 from ..checks import check_int
 from ..errors import TooLargeError
 from ..limits import (check_cost, dense_stage_seconds, geodesic_seconds, human_bytes, lh05_affinity_bytes, local_seconds, metric_bytes,
                       search_seconds)
 from ..matching.nested import core_size
-from ..matching.spectral import MAX_AFFINITY_BYTES, lh05_match
+from ..matching.spectral import MAX_AFFINITY_BYTES, LH05Options
 
 #: Witness searches a CNBS step or a heat map costs, in units of one default search (measured on TOSCA).
 SEARCHES_PER_HEAT_MAP = 4
@@ -54,7 +52,7 @@ def matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, 
     beyond ``spectral.MAX_AFFINITY_BYTES`` the matcher refuses whatever ``force`` says."""
     if matcher != "lh05":
         return 0.0
-    k = options.get("k", inspect.signature(lh05_match).parameters["k"].default)
+    k = options.get("k", LH05Options().k)  # the declared default
     nested = options.get("nested", True) and core_size(n_landmarks) is not None
     nbytes = lh05_affinity_bytes(n_points, core_size(n_landmarks) if nested else n_landmarks, check_int(k, "k", lo=1))
     if nbytes > MAX_AFFINITY_BYTES:
