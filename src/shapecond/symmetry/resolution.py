@@ -194,7 +194,7 @@ def _best_global(D, n, maps, covering_radius):
 
 
 def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landmarks=(), seed=0,
-                      effort="default", score_hi=None, score_lo=None, time_limit=None) -> ResolutionReport:
+                      effort="default", score_hi=None, time_limit=None) -> ResolutionReport:
     """Compare the dense score over the first M/2 targets with the one over all M.
 
     The question is whether the *surface* has a symmetry, so the report judges
@@ -211,16 +211,14 @@ def resolution_report(D_hi, n_samples: int, covering_radius: float | None, landm
         (M/2) block is the same construction with half the targets).
     covering_radius : covering radius of the full Y (units of D_hi).
     score_hi : an already computed ``SearchResult`` (or ``SymmetryScore``) for D_hi,
-        whose witness and maps are reused (its maps also warm-start the M/2 search).
-    score_lo : an already computed search over the first M/2 targets (the coarse
-        level of ``coarse_to_fine``, or ``SymmetryScore.coarse``), reused as is.
-    Without either, both levels come from one ``coarse_to_fine`` search.
+        whose witness and maps are reused (its maps also warm-start the M/2 search); its coarse
+        level (``coarse_to_fine``'s, ``SymmetryScore.coarse``), when it has one, is reused as is.
+        Without a score, both levels come from one ``coarse_to_fine`` search.
     time_limit : seconds for the searches run here (None: no limit).
     """
     m = D_hi.shape[0]
     m_lo = coarse_level(m, n_samples)
-    if score_lo is None:
-        score_lo = getattr(score_hi, "coarse", None)
+    score_lo = getattr(score_hi, "coarse", None)
     if score_hi is None and score_lo is None and two_levels(n_samples, m):
         score_hi, score_lo = coarse_to_fine(D_hi, n_samples, landmarks, seed=seed, effort=effort,
                                             time_limit=time_limit)
