@@ -103,7 +103,11 @@ def test_same_ids_samples_report_the_sample_error(files, capsys, matcher):
     write_off(d / "small.off", small.vertices, small.faces)
     code, _, err = run(capsys, "match", d / "src.off", d / "small.off", "--landmarks-source", ls,
                        "--landmarks-target", ls, "--samples", "same-ids", "--points", 60, "-o", d / "x.txt")
-    assert code == 2 and "do not share their vertex ids" in err and err.count("\n") == 1
+    assert code == 2 and "do not share their vertex order" in err and err.count("\n") == 1
+    # one vertex count is not one vertex order: the same surface with its vertices renumbered is refused
+    code, _, err = run(capsys, "match", d / "src.off", d / "tgt.off", "--landmarks-source", ls,
+                       "--landmarks-target", ls, "--samples", "same-ids", "--points", 60, "-o", d / "x.txt")
+    assert code == 2 and "do not share their vertex order" in err and err.count("\n") == 1
     assert not (d / "x.txt").exists()
 
 

@@ -219,10 +219,10 @@ def carry_samples(source: SampledSurface, target: Geometry, solver=None, seed: i
     ``x``'s vertex.
     """
     g = source.geometry
-    if g.n_vertices != target.n_vertices or not np.array_equal(g.ids, target.ids):
+    if not g.shares_vertex_order(target):
         raise InputError(f"{target.name} ({target.n_vertices} vertices) and {g.name} ({g.n_vertices}) "
-                         "do not share their vertex ids: corresponding samples need the same vertex "
-                         "count and order")
+                         "do not share their vertex order (vertex ids and triangles): corresponding samples "
+                         "need one mesh deformed, not two meshes of one vertex count")
     n = source.n_samples
     perm = np.random.default_rng(seed).permutation(n) if shuffle else np.arange(n)
     vertices = source.samples[perm]
