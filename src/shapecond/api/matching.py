@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import inspect
+from dataclasses import fields
 from functools import partial
 
 import numpy as np
@@ -12,8 +12,8 @@ from ..errors import InputError
 from ..matching.error_bar import bar_and_samples
 from ..matching.pipeline import MATCHERS, MatchOptions, match_samples, match_shapes
 from ..matching.sampled import CachedSolver, sample_surface
-from ..matching.seeded import faq_match
-from ..matching.spectral import lh05_match
+from ..matching.seeded import FAQOptions
+from ..matching.spectral import LH05Options
 from ..matching.suggest import suggest_landmarks
 from .guards import guard_match
 from .inputs import DEFAULT_POINTS, load
@@ -25,12 +25,15 @@ _SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "large
              "error_bar": True, "suggest": 0}
 
 
+#: The options dataclass each sample matcher declares its options in.
+_DECLARED = {"lh05": LH05Options, "faq": FAQOptions}
+
+
 def _matcher_options(matcher: str, options: dict) -> dict:
     """The sample matcher's own options, refused before any work when unknown."""
     check_choice(matcher, "matcher", MATCHERS)
-    known = set()
-    if matcher != "zoomout":
-        known = set(list(inspect.signature(lh05_match if matcher == "lh05" else faq_match).parameters)[4:]) - {"seed"}
+    declared = _DECLARED.get(matcher)  # zoomout declares none
+    known = set() if declared is None else {f.name for f in fields(declared)} - {"seed"}  # seed: match's own
     if set(options) - known:  # refused before the geodesics, not as a TypeError after them
         raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
                          f"{matcher!r} (its options: {', '.join(sorted(known)) or 'none'})")
