@@ -200,13 +200,15 @@ G = "demo:sphere:subdivisions=1"
     (lambda: sc.match(G, G, [0], [0], matcher="faq", n_points=8, cache=False, k=3), "unknown option 'k'"),
     (lambda: sc.landmarks(G, 2, "cnbs", 8, cache=False, methd="fps"), "no option 'methd'"),
     (lambda: sc.landmarks(G, 2, "fps", 8, cache=False, resolve_fraction=0.2), "no option 'resolve_fraction'"),
+    (lambda: sc.landmarks(G, 2, "hks", 8, cache=False, alpha=1.0), "no option 'alpha'"),
+    (lambda: sc.heatmap(G, n_points=8, cache=False, resolve_fractio=0.2), "argument 'resolve_fractio'"),
     (lambda: sc.score(G, 8, exact="yes", cache=False), "exact must be 'auto', True or False"),
     (lambda: sc.deformation_level(G, G, n_points=8, error_bar=False), "unknown option 'error_bar'"),
     (lambda: sc.deformation_level(G, [G], n_points=8, refin=False), "unknown option 'refin'"),
     (lambda: sc.deformation_level(G, G, matcher="zoomout"), "not 'zoomout'"),
     (lambda: sc.deformation_level(G, [G, G], landmarks=[0], landmarks_others=[[0]]), "2 other shapes"),
-], ids=["match refin", "faq k", "landmarks methd", "fps resolve_fraction", "score exact=yes", "level error_bar",
-        "level refin", "level zoomout", "level landmark lists"])
+], ids=["match refin", "faq k", "landmarks methd", "fps resolve_fraction", "hks alpha", "heatmap resolve_fractio",
+        "score exact=yes", "level error_bar", "level refin", "level zoomout", "level landmark lists"])
 def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call, needle):
     """They raised TypeError (or a plain ValueError) after the geodesics had been computed."""
     def no_work(*args, **kwargs):

@@ -186,3 +186,23 @@ def test_cnbs_local_on_a_small_mesh():
     D = _dist(np.random.default_rng(0).normal(size=(10, 3)))
     with pytest.raises(InputError):
         select_landmarks(from_distance_matrix(D), 2, "cnbs-local")
+
+
+def test_the_declared_options_of_each_method_are_its_function_s_keywords():
+    """``OWN_OPTIONS`` (what ``select_landmarks`` lets through to a method) is exactly what the method's
+    function takes: a name missing is refused, a name too many is a TypeError after the geodesics."""
+    import inspect
+
+    from shapecond.selection import OWN_OPTIONS, _local_landmarks, check_method_options
+    from shapecond.selection.user import user_landmarks
+
+    def keywords(f, *taken):
+        return set(inspect.signature(f).parameters) - set(taken)
+
+    assert set(OWN_OPTIONS["cnbs-local"]) == keywords(_local_landmarks, "shape", "k", "fixed")
+    assert set(OWN_OPTIONS["hks"]) == keywords(hks_landmarks, "shape", "k", "seed")
+    assert set(OWN_OPTIONS["user"]) == keywords(user_landmarks, "shape")
+    check_method_options("hks", {"time_fraction": 0.2, "n_eigs": 12, "effort": "quick"})
+    for method, other in (("hks", "alpha"), ("cnbs-local", "n_eigs"), ("user", "refine"), ("fps", "ids")):
+        with pytest.raises(InputError, match=f"{method!r} has no option {other!r}"):
+            check_method_options(method, {other: 1})

@@ -18,7 +18,6 @@
 
 from __future__ import annotations
 
-import inspect
 import math
 import time
 from dataclasses import dataclass, fields, replace
@@ -67,29 +66,22 @@ class LandmarkOptions:
 #: Keyword options of ``select_landmarks`` itself, which every method takes.
 COMMON_OPTIONS = tuple(f.name for f in fields(LandmarkOptions))
 
+#: The keyword options of the methods whose functions take them one by one (the keyword
+#: parameters of ``_local_landmarks``, ``hks.hks_landmarks`` and ``user.user_landmarks``).
+OWN_OPTIONS = {"cnbs-local": ("alpha", "energy", "refine"), "hks": ("time_fraction", "n_eigs"),
+               "user": ("ids", "path")}
+
 
 def method_options(method: str) -> frozenset:
     """The keyword options ``select_landmarks`` takes with ``method``: ``COMMON_OPTIONS`` and the
     method's own (for cnbs the fields of ``CNBSOptions``, e.g. ``resolve_fraction``; for the
-    others the parameters of the method's function)."""
-
-    def own(f, *taken):
-        return set(inspect.signature(f).parameters) - set(taken)
-
+    others ``OWN_OPTIONS``)."""
     if method in ("cnbs", "cnbs-scale"):
         from .cnbs import CNBSOptions  # numba: see the note on imports above
 
         extra = {f.name for f in fields(CNBSOptions)} - {"seed", "effort"} | {"progress", "base", "options"}
-    elif method == "cnbs-local":
-        extra = own(_local_landmarks, "shape", "k", "fixed")
-    elif method == "hks":
-        from .hks import hks_landmarks  # a Laplace-Beltrami basis: see the note on imports above
-
-        extra = own(hks_landmarks, "shape", "k", "seed")
-    elif method == "user":
-        extra = own(user_landmarks, "shape")
     else:
-        extra = set()
+        extra = set(OWN_OPTIONS.get(method, ()))
     return frozenset(extra | set(COMMON_OPTIONS))
 
 
@@ -243,5 +235,5 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, **kw) -
     return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps, score)
 
 
-__all__ = ["COMMON_OPTIONS", "LandmarkOptions", "LandmarkSelection", "METHODS", "SCORES", "check_method_options",
-           "method_options", "monotone", "prefix_scores", "select_landmarks"]
+__all__ = ["COMMON_OPTIONS", "LandmarkOptions", "LandmarkSelection", "METHODS", "OWN_OPTIONS", "SCORES",
+           "check_method_options", "method_options", "monotone", "prefix_scores", "select_landmarks"]
