@@ -332,6 +332,27 @@ def test_match_page_knows_the_command_and_the_suggestions(pair_result, tmp_path)
             pages.result_page(pair_result, **bad)
 
 
+def test_to_html_takes_the_declared_options_and_refuses_the_others_in_one_line(pair_result):
+    """``pages.PAGE_OPTIONS`` is what each result's page function takes besides what ``result_page`` sets
+    itself; a match's ``lines`` (set by its page) was a TypeError, it is refused like a misspelling."""
+    import inspect
+
+    def keywords(*functions, given=()):
+        return {name for f in functions for name, p in inspect.signature(f).parameters.items()
+                if p.default is not p.empty} - set(given)
+
+    assert set(pages.PAGE_OPTIONS["ScoreResult"]) == keywords(pages.score_page)
+    assert set(pages.PAGE_OPTIONS["HeatMapResult"]) == keywords(pages.heatmap_page, given=("landmarks", "lines"))
+    assert set(pages.PAGE_OPTIONS["LandmarkResult"]) == keywords(pages.landmarks_page)
+    assert set(pages.PAGE_OPTIONS["LocalResult"]) == keywords(pages.local_page, given=("fixed", "result"))
+    assert set(pages.PAGE_OPTIONS["MatchResult"]) == keywords(
+        pages._match_result_page, pages.match_page, given=("landmarks_source", "landmarks_target", "fields", "lines"))
+    assert "a distinctive title" in pages.result_page(pair_result, title="a distinctive title", up="z")
+    for bad in ("lines", "landmarks_source", "titel"):
+        with pytest.raises(InputError, match=f"unknown option {bad!r} \\(its options: truth, suggestions"):
+            pages.result_page(pair_result, **{bad: ()})
+
+
 def test_match_page_stands_shapes_upright(pair_result):
     import base64
 

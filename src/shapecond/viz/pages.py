@@ -412,31 +412,22 @@ def demo_page(shape, score, small, values, chosen) -> str:
 
 # --- results of the Python interface ------------------------------------------------------------
 
-def _check_options(kw: dict, fn, given=()) -> None:
-    """Refuse in one line a keyword that the page function ``fn`` does not take (or that is set here)."""
-    import inspect
-
-    known = [p.name for p in inspect.signature(fn).parameters.values()
-             if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is not p.empty
-             and p.name not in given]
-    unknown = sorted(set(kw) - set(known))
-    if unknown:
-        raise InputError(f"to_html() got an unknown option {unknown[0]!r} (its options: {', '.join(known) or 'none'})")
-
-
-#: For each result type: the page function whose options ``to_html`` takes, and those it sets itself.
-_PAGE_OPTIONS = {"ScoreResult": ("score_page", ()), "HeatMapResult": ("heatmap_page", ("landmarks", "lines")),
-                 "LandmarkResult": ("landmarks_page", ()), "MatchResult": ("match_page", ("fields",)),
-                 "LocalResult": ("local_page", ("fixed", "result"))}
+#: For each result type: the options its ``to_html`` takes (``result_page``'s keywords), passed on to
+#: its page function (a match's page takes ``truth``, ``suggestions``, ``command`` and ``up`` itself).
+PAGE_OPTIONS = {"ScoreResult": ("title",), "HeatMapResult": ("up", "title", "cmap", "colorbar_label"),
+                "LandmarkResult": ("up", "title"), "MatchResult": ("truth", "suggestions", "command", "up", "title"),
+                "LocalResult": ("title",)}
 
 
 def result_page(result, **kw) -> str:
     """The page of a result of ``shapecond``'s functions (score, heatmap, landmarks, match, local_score)."""
     kind = type(result).__name__
-    if kind in _PAGE_OPTIONS:
-        name, given = _PAGE_OPTIONS[kind]
-        own = MATCH_RESULT_OPTIONS if kind == "MatchResult" else ()
-        _check_options({k: v for k, v in kw.items() if k not in own}, globals()[name], given)
+    if kind not in PAGE_OPTIONS:
+        raise InputError(f"no HTML page for a {kind}")
+    unknown = sorted(set(kw) - set(PAGE_OPTIONS[kind]))
+    if unknown:  # one line, before anything is drawn
+        raise InputError(f"to_html() got an unknown option {unknown[0]!r} "
+                         f"(its options: {', '.join(PAGE_OPTIONS[kind])})")
     if kind == "ScoreResult":
         return score_page(result, **kw)
     if kind == "HeatMapResult":
@@ -449,13 +440,7 @@ def result_page(result, **kw) -> str:
         return landmarks_page(result.shape, result, **kw)
     if kind == "MatchResult":
         return _match_result_page(result, **kw)
-    if kind == "LocalResult":
-        return _local_result_page(result, **kw)
-    raise InputError(f"no HTML page for a {kind}")
-
-
-#: The options a match result's page takes itself before passing the rest to ``match_page``.
-MATCH_RESULT_OPTIONS = ("truth", "suggestions", "command", "up")
+    return _local_result_page(result, **kw)
 
 
 def _match_result_page(result, truth=None, suggestions=(), command=None, up=None, **kw) -> str:
