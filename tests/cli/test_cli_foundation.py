@@ -43,6 +43,10 @@ def test_sample_writes_npz_with_file_ids(tmp_path, capsys):
     (["sample", "demo:sphere", "--points", "2", "-o", "OUT"], "--points must be an integer in [3,"),
     (["sample", "demo:nosuchshape", "-o", "OUT"], "unknown generated shape"),
     (["sample", "demo:sphere", "--bogus", "-o", "OUT"], "No such option"),
+    (["match", "demo:sphere", "demo:sphere", "--landmarks-source", "0", "--landmarks-target", "0", "--refin",
+      "-o", "OUT"], "No such option '--refin'"),
+    (["landmarks", "demo:sphere", "-k", "2", "--resolve-fractio", "0.2"], "No such option '--resolve-fractio'"),
+    (["heatmap", "demo:sphere", "--resolve-fractio", "0.2"], "No such option '--resolve-fractio'"),
     (["info", "missing.off"], "no such file"),
 ])
 def test_bad_input_is_one_error_line_exit_2_and_no_file(tmp_path, capsys, argv, match):
