@@ -5,18 +5,16 @@ options instead of a long parameter list, and still accepts each field as a keyw
 argument, so that ``heat_map(D, resolve_fraction=0.5)`` and
 ``heat_map(D, options=HeatMapOptions(resolve_fraction=0.5))`` are the same call::
 
-    @with_options(HeatMapOptions)
     def heat_map(D, n_samples=None, ..., options=None, **kw):
         opts = merge_options(HeatMapOptions, options, kw, "heat_map")
 
-``with_options`` shows the fields in the function's signature (``inspect.signature``,
-``help``), which the callers that read a function's options from its signature rely on.
+The dataclass is the one declaration of the options: who needs to know them (the API's
+refusal of an unknown matcher option, a default) reads its fields, not the function's signature.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 
 
 def merge_options(cls, options, kw: dict, where: str):
@@ -33,22 +31,4 @@ def merge_options(cls, options, kw: dict, where: str):
     return dataclasses.replace(base, **kw) if kw else base
 
 
-def with_options(cls, more: bool = False):
-    """Decorator: the signature of the function shows the fields of the dataclass ``cls`` as
-    keyword-only parameters (with their defaults) in place of its ``**kw``, or before it when
-    ``more`` (the function takes other keywords too)."""
-
-    def decorate(func):
-        sig = inspect.signature(func)
-        params = [p for p in sig.parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
-        rest = [p for p in sig.parameters.values() if p.kind is inspect.Parameter.VAR_KEYWORD and more]
-        taken = {p.name for p in params}
-        params += [inspect.Parameter(f.name, inspect.Parameter.KEYWORD_ONLY, default=f.default)
-                   for f in dataclasses.fields(cls) if f.name not in taken]
-        func.__signature__ = sig.replace(parameters=params + rest)
-        return func
-
-    return decorate
-
-
-__all__ = ["merge_options", "with_options"]
+__all__ = ["merge_options"]

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment, quadratic_assignment
 
-from shapecond._options import merge_options, with_options
+from shapecond._options import merge_options
 from shapecond.errors import InputError
 from shapecond.matching.candidates import check_distances, check_landmarks, descriptor_cost
 from shapecond.matching.nested import core_size, with_landmarks
@@ -106,7 +106,6 @@ def _objective_matrices(Ds, Dt, opts):
     return np.exp(-Ds ** 2 / (2 * s * s)), np.exp(-Dt ** 2 / (2 * s * s)), s
 
 
-@with_options(FAQOptions)
 def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(), options=None, **kw) -> SampleMatch:
     """FAQ seeded graph matching, source to target (module docstring).
 

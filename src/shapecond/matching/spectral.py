@@ -75,7 +75,7 @@ from scipy.linalg.blas import ssymv
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse.linalg import LinearOperator, eigsh
 
-from shapecond._options import merge_options, with_options
+from shapecond._options import merge_options
 from shapecond.errors import InputError, TooLargeError
 from shapecond.matching import refine as R
 from shapecond.matching.candidates import Candidates, band_candidates, check_distances, k_best_candidates
@@ -380,7 +380,6 @@ class LH05Options:
             raise InputError(f"unknown rounding {self.rounding!r} (greedy or assignment)")
 
 
-@with_options(LH05Options)
 def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), options=None, **kw) -> SampleMatch:
     """Leordeanu–Hebert spectral matching with landmarks, source to target.
 

@@ -22,7 +22,6 @@ import math
 import time
 from dataclasses import dataclass, fields, replace
 
-from .._options import with_options
 from ..checks import check_float
 from ..errors import InputError
 from ..threads import single_blas_thread
@@ -184,7 +183,6 @@ def _baseline(shape, k, method, seed, fixed, kw) -> list:
 
 
 @single_blas_thread
-@with_options(LandmarkOptions, more=True)
 def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, **kw) -> LandmarkSelection:
     """Choose ``k`` landmarks on ``shape`` with ``method``.
 

@@ -83,7 +83,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._options import merge_options, with_options
+from .._options import merge_options
 from ..checks import check_landmark_count
 from ..errors import InputError
 from ..threads import single_blas_thread
@@ -265,7 +265,6 @@ def _maps_of(res, n_maps):
 
 
 @single_blas_thread
-@with_options(HeatMapOptions)
 def heat_map(D, n_samples=None, landmarks=(), base=None, budget=None, progress=None, options=None,
              **kw) -> HeatMap:
     """The CNBS heat map: σ (lower bound) with each candidate sample fixed.
@@ -490,7 +489,6 @@ def _next_base(D, n, L, c, hm, prev, budget, opts):
 
 
 @single_blas_thread
-@with_options(CNBSOptions)
 def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=None, options=None, **kw):
     """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from shapecond._options import merge_options, with_options
+from shapecond._options import merge_options
 from shapecond.jsonable import jsonable
 from shapecond.errors import InputError, TooLargeError
 from shapecond.limits import SOLVE_SECONDS, Deadline, check_cost, search_seconds
@@ -157,7 +157,6 @@ class ScoreOptions:
     force: bool = False
 
 
-@with_options(ScoreOptions)
 def symmetry_score(D, n_samples=None, landmarks=(), search=None, options=None, **kw) -> SymmetryScore:
     """Bracket of the global symmetry score σ(X) (Eq. 5) and of κ (Theorem 4.1).
 
