@@ -30,9 +30,16 @@ suggestion clicked at its true image): picking the point whose cell held the mos
 evidence (the first version) left the mean error at 58 → 60 → 57 → 58 ×10⁻³
 sqrt(area) while the farthest point took it to 41; on cow → muybridge_097 the
 worst-mapped sample (error 0.44) fixed left the map at 0.158, the farthest
-one took it to 0.055.  Where the doubt is broad (most maps between species)
-this is farthest-point sampling continued; where it is local (a swapped
-limb), the tip of the doubtful part.  ``gain`` reports what the point's cell
+one took it to 0.055.  Ranking the doubtful samples by the bar expected after
+each (δ with the point fixed, warm-started from the bar's witness maps as CNBS's
+heat map does: the paper's greedy step at the pair's level) was no better:
+35/32/31 and 22/21/22 ×10⁻³ after +1/+2/+3 on the first two of those pairs,
+against 34/31/31 and 21/20/20 for the farthest point.  Where the doubt is broad
+(most maps between species) this is farthest-point sampling continued; where it
+is local (a swapped limb), the tip of the doubtful part.  Between species the
+dense stage itself sets the floor: started from the *true* map with 9 landmarks
+it ends at 0.031 sqrt(area) on those pairs, so no choice of 3 more points takes
+a 6-landmark match (0.034) much lower.  ``gain`` reports what the point's cell
 (the samples nearer to it than to every landmark) holds of the suspicion
 ``max(evidence, doubt)``, divided by N: the mean error its correspondence may
 remove if it repairs its cell.
