@@ -169,14 +169,18 @@ def test_sample_archives_read_back_as_inputs(tmp_path, capsys):
     assert code == 0 and json.loads(out)["n_points"] == 12
 
 
-SCALE_FREE_LANDMARKS = [0, 600, 1200, 1800]
+SCALE_FREE_LANDMARKS = [0, 300, 600, 900]
 
 
 @pytest.fixture(scope="module")
 def unscaled_match():
-    """A mesh pair and its dense map at the file's own scale (computed once for both scales below)."""
-    src = sc.load("demo:animal:delta=0.1,resolution=0.05")
-    tgt = sc.load("demo:animal:delta=0.3,resolution=0.05")
+    """A mesh pair and its dense map at the file's own scale (computed once for both scales below).
+
+    1318 vertices (resolution 0.07), not 2538 (0.05): what is tested is the coordinates' scale, which
+    no step treats differently with the vertex count; a match costs 3.7 s of CPU instead of 12 s, and
+    the test's 0.999 then allows one differing vertex instead of two."""
+    src = sc.load("demo:animal:delta=0.1,resolution=0.07")
+    tgt = sc.load("demo:animal:delta=0.3,resolution=0.07")
     lm = SCALE_FREE_LANDMARKS
     return src, tgt, sc.match((src.vertices, src.faces), (tgt.vertices, tgt.faces), lm, lm, n_points=60, cache=False)
 

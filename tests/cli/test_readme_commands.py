@@ -60,6 +60,20 @@ def test_the_set_up_commands_install_the_shapecond_command_and_the_test_extra():
     assert any(re.match(r"pytest\b", r) for r in extra), extra
 
 
+def test_the_test_command_runs_in_workers_that_the_test_extra_installs():
+    """``pytest -n 2`` needs pytest-xdist: the test extra of pyproject.toml (read from the file, as
+    a fresh ``pip install '.[test]'`` reads it) lists it, and ``.ci/run`` runs the README's command."""
+    tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
+
+    setup = re.search(r"```bash\n(.*?)```", README, re.S).group(1)
+    command = re.search(r"-m pytest[^\n]*", setup).group(0)
+    assert " -n 2" in command, command
+    root = Path(__file__).resolve().parents[2]
+    extra = tomllib.loads((root / "pyproject.toml").read_text())["project"]["optional-dependencies"]["test"]
+    assert any(re.match(r"pytest-xdist\b", r) for r in extra), extra
+    assert f"pip install '.[test]' && .venv/bin/python {command}\n" in (root / ".ci" / "run").read_text()
+
+
 def test_the_table_lists_every_command():
     assert [c for c, _, _ in TABLE] == ["info", "sample", "score", "kappa", "local", "landmarks", "heatmap",
                                         "match", "evaluate", "batch", "demo", "cache"]

@@ -164,7 +164,10 @@ def test_scheduler_without_dask_is_an_input_error(dataset, tmp_path, capsys):
     assert ex.value.code == 2 and "needs dask" in err
 
 
-def test_landmark_selection_is_cached(dataset):
+def test_landmark_selection_is_cached(dataset, tmp_path, monkeypatch):
+    # a cache folder of its own: the session's is shared with the other test worker, whose landmark
+    # entries may appear between the two listings below
+    monkeypatch.setenv("SHAPECOND_CACHE", str(tmp_path / "cache"))
     args = ("strip", dataset / "strip" / "strip0.off", "fps", 4, ShapeSetup(30, 0, "heat", True), True)
     from shapecond.cache import cache_dir
 
