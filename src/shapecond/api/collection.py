@@ -18,6 +18,11 @@ geodesics are the rows of the samples the matcher itself used
 (``matching.sampled.sample_surface``, cached), so a cycle costs no new solve when
 the cache is on.  A map that sends its source onto one point of the target and
 back scores like a bad map; a faithful pair of maps scores near 0.
+
+Instead of a template, ``match_collection(None, shapes, pairs=...)`` matches the
+pairs a list gives (``listed_pairs``, as ``shapecond batch --pairs``): each
+pair's first shape takes the template's part (its labels give the order), its
+maps are named ``FIRST.to.SECOND`` (``pair_map_name``).
 """
 
 from __future__ import annotations
