@@ -2,7 +2,7 @@
 
 Usage:
     python benchmarks/bench_collection.py RELEASE [--matcher M] [--points N] [--both-directions]
-           [--max-targets T] [--keep DIR] [--no-write]
+           [--max-targets T] [--keep DIR | --reuse DIR] [--cache DIR] [--no-write]
 
 RELEASE is a remeshed release as ``shapecond evaluate`` reads it
 (``shapecond.evaluation.datasets``: ``SMAL_r`` with ``shapes_train/`` + ``corres/``,
