@@ -1,6 +1,7 @@
 """Matching listed pairs (``--pairs``), both directions (``--both-directions``) and the cycle error."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -8,6 +9,7 @@ import shapecond as sc
 from shapecond.api.collection import cycle_error
 from shapecond.batch import run_batch
 from shapecond.batch.table import Table
+from shapecond.errors import InputError
 from shapecond.shapes.io import write_mesh
 from tests.batch.test_match_collection import _write
 from tests.helpers import run_cli
@@ -161,3 +163,85 @@ def test_pairs_options_that_do_not_fit_are_refused(strips, tmp_path, capsys):
     assert "--what match needs --pairs FILE" in _bad(capsys, tmp_path, root, "--what", "match")
     assert "--both-directions needs" in _bad(capsys, tmp_path, root, "--both-directions")
     assert "no such file" in _bad(capsys, tmp_path, root, "--pairs", tmp_path / "missing.txt")
+
+
+# --- the API: sc.match_collection(None, shapes, pairs=...) -----------------------------------------
+
+def _records(table):
+    return table if isinstance(table, list) else table.to_dict("records")
+
+
+@pytest.mark.slow
+def test_match_collection_matches_listed_pairs_from_a_file_or_a_list(strips, tmp_path):
+    root, n = strips
+    shapes = [root / f"{k}.off" for k in ("s1", "s2", "template")]
+    pairs = tmp_path / "pairs.txt"
+    pairs.write_text("# first matched to second\ns1 s2\ns2.off, template\n")
+    table, maps = sc.match_collection(None, shapes, pairs=pairs, maps_dir=tmp_path / "maps", n_points=16)
+    rows = _records(table)
+    assert [(r["map"], r["direction"], r["source"], r["target"], r["shape"]) for r in rows] == [
+        ("s1.to.s2", "first to second", "s1", "s2", "s2"),
+        ("s2.to.template", "first to second", "s2", "template", "template")]
+    assert all(r["error"] is None and r["landmark_pairs"] == 4 and r["bar"] > 0 for r in rows), rows
+    assert rows[0]["file"] == str(root / "s2.off")
+    assert maps.path("s1.to.s2") == tmp_path / "maps" / "s1.to.s2.txt"
+    for name, (source, target) in {"s1.to.s2": ("s1", "s2"), "s2.to.template": ("s2", "template")}.items():
+        assert maps[name].shape == (n[source],) and 0 <= maps[name].min() and maps[name].max() < n[target]
+    # the same pairs as a list (names, a file name, a path as given), both ways: the first maps are the same
+    listed = [("s1", root / "s2.off"), ("s2.off", "template")]
+    table, again = sc.match_collection(None, shapes, pairs=listed, both_directions=True, n_points=16)
+    rows = _records(table)
+    assert [(r["map"], r["direction"]) for r in rows] == [
+        ("s1.to.s2", "first to second"), ("s2.to.s1", "second to first"),
+        ("s2.to.template", "first to second"), ("template.to.s2", "second to first")]
+    assert all(r["error"] is None and r["cycle_error"] >= 0 for r in rows), rows
+    assert np.array_equal(again["s1.to.s2"], maps["s1.to.s2"]) and again["s2.to.s1"].shape == (n["s2"],)
+
+
+@pytest.mark.parametrize("pairs, message", [
+    ([("s1", "nothing")], "pairs: the pairs list names 'nothing', which is not one of the input shapes"),
+    ([("s1", "s1.off")], "s1 and s1.off are one shape, paired with itself"),
+    ([("s1", "s2"), ("s1", "s2")], "the pair s1 s2 is listed twice"),
+    ([], "pairs: no pairs"),
+    ([("s1",)], "pairs: item 1 is not two shape names"),
+    (["s1 s2"], "pairs: item 1 is not two shape names"),
+    ({"s1": "s2"}, "pairs must be the path of a pairs list or a list"),
+    (3, "pairs must be the path of a pairs list or a list"),
+])
+def test_match_collection_refuses_a_bad_pairs_list_before_any_work(strips, pairs, message):
+    root, _ = strips
+    with pytest.raises(InputError, match=re.escape(message)):
+        sc.match_collection(None, [root / "s1.off", root / "s2.off"], pairs=pairs, n_points=16)
+
+
+def test_match_collection_refuses_a_bad_pairs_file_a_template_with_pairs_and_neither(strips, tmp_path):
+    root, _ = strips
+    shapes = [root / "s1.off", root / "s2.off"]
+    (tmp_path / "p.txt").write_text("s1 s2\ns2 s1\n")
+    with pytest.raises(InputError, match="in either order"):
+        sc.match_collection(None, shapes, pairs=tmp_path / "p.txt", both_directions=True)
+    (tmp_path / "self.txt").write_text("s1 s1.off\n")
+    with pytest.raises(InputError, match="s1 is paired with itself"):
+        sc.match_collection(None, shapes, pairs=tmp_path / "self.txt")
+    with pytest.raises(InputError, match="no such file"):
+        sc.match_collection(None, shapes, pairs=tmp_path / "missing.txt")
+    with pytest.raises(InputError, match="not both"):
+        sc.match_collection(root / "template.off", shapes, pairs=[("s1", "s2")])
+    with pytest.raises(InputError, match="template=None"):
+        sc.match_collection(None, shapes)
+
+
+def test_a_pairs_first_shape_without_usable_landmarks_is_its_rows_error(strips, tmp_path):
+    root, _ = strips
+    _write(tmp_path, "bare", 8, labels="")
+    _write(tmp_path, "far", 8, labels="abc")
+    (tmp_path / "far.lmk").write_text("a 0\nb 1\nc 100000\n")  # an id out of range
+    shapes = [tmp_path / "bare.off", tmp_path / "far.off", root / "s1.off"]
+    table, maps = sc.match_collection(None, shapes, pairs=[("bare", "s1"), ("far", "s1")], both_directions=True,
+                                      n_points=16)
+    rows = _records(table)
+    assert [r["map"] for r in rows] == ["bare.to.s1", "s1.to.bare", "far.to.s1", "s1.to.far"]
+    assert [r["error"].split(":")[0] for r in rows] == ["the pair's first shape bare"] * 2 + [
+        "the pair's first shape far"] * 2
+    assert "no landmarks" in rows[0]["error"] and "landmark vertex id 100000 is out of range" in rows[2]["error"]
+    assert len(maps) == 0

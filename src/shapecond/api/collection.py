@@ -18,6 +18,11 @@ geodesics are the rows of the samples the matcher itself used
 (``matching.sampled.sample_surface``, cached), so a cycle costs no new solve when
 the cache is on.  A map that sends its source onto one point of the target and
 back scores like a bad map; a faithful pair of maps scores near 0.
+
+Instead of a template, ``match_collection(None, shapes, pairs=...)`` matches the
+pairs a list gives (``listed_pairs``, as ``shapecond batch --pairs``): each
+pair's first shape takes the template's part (its labels give the order), its
+maps are named ``FIRST.to.SECOND`` (``pair_map_name``).
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ import numpy as np
 
 from ..errors import InputError, ShapecondError
 from ..shapes.landmark_files import check_in_range, landmarks_of, pair_by_label, read_landmark_csv
+from ..shapes.pairs_list import read_pairs
 from ..matching.sampled import sample_surface
 from .inputs import DEFAULT_POINTS, load
 from .matching import match
@@ -39,6 +45,8 @@ from .matching import match
 DIRECTION = "template to shape"
 #: Direction of the second map of a shape matched both ways.
 REVERSE = "shape to template"
+#: The directions of the maps of a listed pair (``pairs``), the first as the list gives it.
+PAIR_DIRECTIONS = ("first to second", "second to first")
 #: Fewest shared labels a shape needs to be matched.
 MIN_PAIRS = 3
 #: A bar above this (sqrt(area) of the template) says "annotate more": the mean geodesic error of
@@ -61,6 +69,65 @@ def map_names(shapes) -> list[str]:
         seen[name] = s
         names.append(name)
     return names
+
+
+def pair_map_name(first: str, second: str) -> str:
+    """The name of the map of a listed pair (``FIRST.to.SECOND``, from the shapes' map names)."""
+    return f"{first}.to.{second}"
+
+
+def _pair_list(pairs) -> tuple[list[tuple[str, str]], str]:
+    """(the pairs as two names each, how messages name the list): ``read_pairs`` of a file, or a list."""
+    if isinstance(pairs, (str, os.PathLike)):
+        return read_pairs(pairs), str(pairs)
+    if isinstance(pairs, Mapping) or not hasattr(pairs, "__iter__"):
+        raise InputError(f"pairs must be the path of a pairs list or a list of (first, second) shape names, "
+                         f"got {type(pairs).__name__}")
+    out = []
+    for k, pair in enumerate(pairs, 1):
+        if isinstance(pair, (str, bytes)) or not hasattr(pair, "__len__") or len(pair) != 2 or not all(
+                isinstance(n, (str, os.PathLike)) for n in pair):
+            raise InputError(f"pairs: item {k} is not two shape names: {str(pair)[:60]!r}")
+        out.append((os.fspath(pair[0]), os.fspath(pair[1])))
+    if not out:
+        raise InputError("pairs: no pairs")
+    return out, "pairs"
+
+
+def listed_pairs(pairs, specs, names: dict, both: bool = False) -> list[tuple[str, str]]:
+    """(first spec, second spec) of every listed pair, the first matched to the second.
+
+    Parameters
+    ----------
+    pairs : the path of a pairs list (``shapes.pairs_list.read_pairs``: two shape names a line, ``#``
+        comments) or a list of (first, second) names.
+    specs : the input shapes; a name in ``pairs`` is a shape's map name (``map_names``), its file name or
+        the spec itself.
+    names : spec -> map name.
+    both : the pairs are matched both ways (a pair listed in either order is then listed twice).
+
+    ``InputError`` for a name that is not one of ``specs``, a shape paired with itself, a pair listed twice
+    or an empty list.
+    """
+    pairs, where = _pair_list(pairs)
+    by_name = {}
+    for spec in specs:
+        for key in (names[spec], Path(spec).name, spec):
+            by_name.setdefault(key, spec)
+    out, seen = [], set()
+    for a, b in pairs:
+        missing = next((n for n in (a, b) if n not in by_name), None)
+        if missing is not None:
+            raise InputError(f"{where}: the pairs list names {missing!r}, which is not one of the input shapes")
+        pair = (by_name[a], by_name[b])
+        if pair[0] == pair[1]:
+            raise InputError(f"{where}: {a} and {b} are one shape, paired with itself")
+        if pair in seen or (both and pair[::-1] in seen):
+            raise InputError(f"{where}: the pair {a} {b} is listed twice" + (" (in either order: with both "
+                             "directions each pair is matched both ways)" if both else ""))
+        seen.add(pair)
+        out.append(pair)
+    return out
 
 
 def template_landmarks(template, table: dict | None = None) -> dict[str, int]:
@@ -252,18 +319,21 @@ def reverse_name(name: str) -> str:
     return f"{name}.to_template"
 
 
-def _shape_rows(loaded, shape, name, template_lm, found, both, match_options) -> list[tuple[dict, object]]:
-    """[(row, map or None)] of one shape of ``match_collection``: one direction, or both."""
+def _shape_rows(reference, shape, heads: list[dict], found, match_options) -> list[tuple[dict, object]]:
+    """[(row, map or None)] of one task of ``match_collection``: ``reference`` (a loaded shape, its ``{label:
+    vertex id}``, how messages name it; or the exception that made it unusable) matched to ``shape``, one
+    direction or both (one head each)."""
     t0 = time.perf_counter()
-    heads = [{"shape": name, "map": name, "file": shape, "direction": DIRECTION}]
-    if both:
-        heads.append({"shape": name, "map": reverse_name(name), "file": shape, "direction": REVERSE})
     try:
+        if isinstance(reference, Exception):
+            raise reference
         if found is None or isinstance(found, Exception):
             raise found or InputError("no landmarks for this shape (no NAME.lmk beside it and no rows in the "
                                       "landmark table)")
-        done = (match_both_ways(loaded, shape, template_lm, found, **match_options) if both
-                else [match_to_template(loaded, shape, template_lm, found, **match_options)])
+        loaded, reference_lm, words = reference
+        options = {**match_options, "reference": words}
+        done = (match_both_ways(loaded, shape, reference_lm, found, **options) if len(heads) == 2
+                else [match_to_template(loaded, shape, reference_lm, found, **options)])
     except ShapecondError as exc:
         done = [({"error": _one_line(exc)}, None)] * len(heads)
     seconds = time.perf_counter() - t0
@@ -283,33 +353,96 @@ def _landmarks_or_error(shape, table):
         return exc
 
 
-def match_collection(template, shapes, landmarks=None, *, maps_dir=None, both_directions: bool = False,
+def _template_tasks(template, shapes, names: dict, table, both: bool, flags: dict):
+    """(reference, shape, heads) of every shape matched from ``template``; ``InputError`` for an unusable
+    template."""
+    loaded = load(template, **flags)
+    template_lm = template_landmarks(template, table)
+    if not hasattr(loaded, "ids"):
+        raise InputError(f"{template}: the template must be a mesh or point cloud, not a distance matrix")
+    check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {template}")
+    reference, tname = (loaded, template_lm, "the template"), Path(str(template)).stem
+    for shape in shapes:
+        name = names[shape]
+        heads = [{"shape": name, "map": name, "file": shape, "direction": DIRECTION, "source": tname,
+                  "target": name}]
+        if both:
+            heads.append({"shape": name, "map": reverse_name(name), "file": shape, "direction": REVERSE,
+                          "source": name, "target": tname})
+        yield reference, shape, heads
+
+
+def _first_shape(spec: str, name: str, table, flags: dict):
+    """(loaded, ``{label: vertex id}``, how messages name it) of a pair's first shape, or the ``InputError``
+    saying why it cannot be used."""
+    words = f"the pair's first shape {name}"
+    try:
+        found = landmarks_of(spec, table)
+        if found is None:
+            raise InputError("no landmarks (no NAME.lmk beside it and no rows in the landmark table)")
+        loaded = load(spec, **flags)
+        if not hasattr(loaded, "ids"):
+            raise InputError("a distance matrix cannot be matched")
+        check_in_range(found[0].values(), int(loaded.ids.max()) + 1, found[1])
+    except ShapecondError as exc:
+        return InputError(f"{words}: {_one_line(exc)}")
+    return loaded, found[0], words
+
+
+def _pair_tasks(pairs, shapes, names: dict, table, both: bool, flags: dict):
+    """(reference, shape, heads) of every listed pair (``listed_pairs``), each first shape loaded once."""
+    firsts = {}
+    for first, second in listed_pairs(pairs, shapes, names, both):
+        if first not in firsts:
+            firsts[first] = _first_shape(first, names[first], table, flags)
+        ends = (names[first], names[second])
+        heads = [{"shape": ends[1], "map": pair_map_name(*ends), "file": second, "direction": PAIR_DIRECTIONS[0],
+                  "source": ends[0], "target": ends[1]}]
+        if both:
+            heads.append({"shape": ends[1], "map": pair_map_name(*ends[::-1]), "file": second,
+                          "direction": PAIR_DIRECTIONS[1], "source": ends[1], "target": ends[0]})
+        yield firsts[first], second, heads
+
+
+def match_collection(template, shapes, landmarks=None, *, pairs=None, maps_dir=None, both_directions: bool = False,
                      **match_options):
-    """Match ``template`` to every shape of ``shapes`` with the landmarks their files name (module docstring).
+    """Match ``template`` to every shape of ``shapes`` with the landmarks their files name (module docstring),
+    or match the pairs ``pairs`` lists.
 
     Parameters
     ----------
     template : path of the template shape; its landmarks in ``NAME.lmk`` beside it or in ``landmarks``.
+        None with ``pairs``.
     shapes : paths of the shapes (each with ``NAME.lmk`` beside it, or rows in ``landmarks``).
     landmarks : None (the ``.lmk`` files), the path of a CSV file ``shape,label,vertex``, or a dict
         ``{shape name: {label: vertex id}}``.  Points are paired by label (``shapes.landmark_files``).
+    pairs : instead of a template, the pairs of ``shapes`` to match, the first of each to the second (the
+        labels in the first's order): the path of a pairs list (two shape names a line, ``#`` comments, as
+        ``shapecond batch --pairs``) or a list of (first, second) names; a name is a shape's name (its file
+        name without suffix), its file name or its path as given in ``shapes``.  Maps are named
+        ``FIRST.to.SECOND`` (``pair_map_name``), with the directions of ``PAIR_DIRECTIONS``.
     maps_dir : a folder to write each map to (``NAME.txt``, atomically; read back on access); None keeps
         the maps in memory.
     both_directions : also match each shape to the template (``REVERSE``, its map named
-        ``NAME.to_template``, ``reverse_name``) and give both maps their ``cycle_error``.
+        ``NAME.to_template``, ``reverse_name``), or each pair's second shape to its first, and give both
+        maps their ``cycle_error``.
     **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``dense``, ``seed``...).
 
     Returns
     -------
     (table, maps): ``table`` a pandas DataFrame when pandas can be imported, else a list of dicts, one
-    row per shape in order (two with ``both_directions``, template to shape first): ``shape`` (its name),
-    ``map`` (the map's name), ``file``, ``direction``, the fields of ``match_to_template`` (with
-    ``both_directions`` also ``cycle_error``: ``match_both_ways``), ``annotate_more`` (bar >
-    ``ANNOTATE_MORE``), ``seconds`` (the shape's, both directions together) and ``error`` (the
-    one-line message of a map that failed; the others are then missing).  ``maps`` a ``Maps``: map name ->
-    map, read lazily.  ``InputError`` when the template, its landmarks or the landmark CSV file cannot be
-    read or a template id is out of range; a shape's own problem (no landmarks, a broken ``.lmk``, fewer
-    than ``MIN_PAIRS`` shared labels, an id out of range, a file that does not load) is its row's error.
+    row per shape (or pair) in order (two with ``both_directions``, template to shape first): ``shape``
+    (its name; a pair's second shape), ``map`` (the map's name), ``file`` (the shape's), ``direction``,
+    ``source`` and ``target`` (the names of the map's two shapes: the map gives the target's vertex id of
+    each source vertex id), the fields of ``match_to_template`` (with ``both_directions`` also
+    ``cycle_error``: ``match_both_ways``), ``annotate_more`` (bar > ``ANNOTATE_MORE``), ``seconds`` (the
+    task's, both directions together) and ``error`` (the one-line message of a map that failed; the others
+    are then missing).  ``maps`` a ``Maps``: map name -> map, read lazily.  ``InputError`` when the
+    template, its landmarks or the landmark CSV file cannot be read or a template id is out of range, and
+    for a template given with ``pairs`` (or neither) or a bad pairs list (``listed_pairs``: an unknown name,
+    a shape paired with itself, a pair listed twice, no pairs); a shape's own problem (no landmarks, a
+    broken ``.lmk``, fewer than ``MIN_PAIRS`` shared labels, an id out of range, a file that does not
+    load; a pair's first shape with such a problem) is its row's error.
 
     Examples
     --------
@@ -325,28 +458,34 @@ def match_collection(template, shapes, landmarks=None, *, maps_dir=None, both_di
     3
     >>> maps["cat"].shape == (g.n_vertices,)
     True
+    >>> shapes = [folder / "template.off", folder / "cat.off"]
+    >>> list(sc.match_collection(None, shapes, pairs=[("cat", "template")], n_points=40)[1])
+    ['cat.to.template']
     """
     table = read_landmark_csv(landmarks) if isinstance(landmarks, (str, os.PathLike)) else landmarks
     if table is not None and not isinstance(table, dict):
         raise InputError("landmarks must be None, the path of a CSV file or a dict {shape: {label: vertex}}")
     if not isinstance(both_directions, bool):
         raise InputError(f"both_directions must be True or False, got {both_directions!r}")
+    if (template is None) == (pairs is None):
+        raise InputError("give a template, or pairs=... without a template (template=None), not both"
+                         if pairs is not None else "give a template, or pairs=... with template=None")
     shapes = [str(s) for s in shapes]
-    names = map_names(shapes)
+    names = dict(zip(shapes, map_names(shapes)))
     flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
-    loaded = load(template, **flags)
-    template_lm = template_landmarks(template, table)
-    check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {template}")
-    maps, rows = Maps(maps_dir), []
-    for name, shape in zip(names, shapes):
-        found = _landmarks_or_error(shape, table)
-        for row, vertex_map in _shape_rows(loaded, shape, name, template_lm, found, both_directions,
-                                           match_options):
+    tasks = (_template_tasks(template, shapes, names, table, both_directions, flags) if pairs is None
+             else _pair_tasks(pairs, shapes, names, table, both_directions, flags))
+    tasks = list(tasks)  # every input problem of the call before any work
+    maps, rows, found = Maps(maps_dir), [], {}
+    for reference, shape, heads in tasks:
+        if shape not in found:
+            found[shape] = _landmarks_or_error(shape, table)
+        for row, vertex_map in _shape_rows(reference, shape, heads, found[shape], match_options):
             if vertex_map is not None:
                 maps.add(row["map"], vertex_map)
             rows.append(row)
     return _table(rows), maps
 
 
-__all__ = ["ANNOTATE_MORE", "DIRECTION", "REVERSE", "Maps", "cycle_error", "match_both_ways", "match_collection",
-           "match_to_template", "reverse_name"]
+__all__ = ["ANNOTATE_MORE", "DIRECTION", "PAIR_DIRECTIONS", "REVERSE", "Maps", "cycle_error", "listed_pairs",
+           "match_both_ways", "match_collection", "match_to_template", "pair_map_name", "reverse_name"]

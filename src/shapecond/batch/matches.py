@@ -11,7 +11,7 @@ the row's ``params``, so that ``--resume`` recomputes a shape whose landmarks
 were changed, and only it.
 
 With ``--pairs FILE`` (``--what match``) the shapes are matched as the file
-lists them (``evaluation.datasets.read_pairs``: two shape names a line, the
+lists them (``api.collection.listed_pairs``: two shape names a line, the
 first matched to the second); a name that is not one of the inputs, a pair
 listed twice, an empty list or a shape paired with itself stops the batch
 before anything is written.  Each line is one task whose row's ``file`` is
@@ -35,7 +35,8 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..api.collection import DIRECTION, REVERSE, map_names, reverse_name, write_map
+from ..api.collection import (DIRECTION, PAIR_DIRECTIONS, REVERSE, listed_pairs, map_names, pair_map_name,
+                              reverse_name, write_map)
 from ..errors import InputError
 from ..shapes.landmark_files import pair_by_label
 from .rows import parse_what
@@ -47,8 +48,6 @@ MAPS_FOLDER = "maps"
 #: The columns that belong to one map (``api.collection.match_to_template``'s fields and the cycle error).
 MAP_FIELDS = ("landmark_pairs", "landmark_labels", "bar", "bar_epsilon", "bar_epsilon_hat", "suggest_source_id",
               "suggest_image_id", "suggest_bar_after", "cycle_error", "map_file")
-#: The directions of the maps of a listed pair (``--pairs``), the first as the list gives it.
-PAIR_DIRECTIONS = ("first to second", "second to first")
 
 
 @dataclass(frozen=True)
@@ -152,7 +151,7 @@ class MatchPlan:
         if self.pairs is None:
             return self.names[spec] if k == 0 else reverse_name(self.names[spec])
         ends = (self.names[reference], self.names[spec])
-        return ".to.".join(ends if k == 0 else ends[::-1])
+        return pair_map_name(*(ends if k == 0 else ends[::-1]))
 
     def rows_of(self, row: dict, unit, params: list[str]) -> list[dict]:
         """The rows of one task's result ``row`` (one per direction), each map written first (atomically)."""
@@ -196,31 +195,6 @@ def _shape_landmarks(specs, table) -> tuple[dict, dict]:
     return found, errors
 
 
-def _pair_specs(path, specs, names: dict, both: bool) -> list[tuple[str, str]]:
-    """The listed pairs as (first spec, second spec): ``read_pairs``, each name one of the inputs (its map
-    name, or its file name), no pair twice (nor reversed, with both directions)."""
-    from ..evaluation.datasets import read_pairs
-
-    by_name = {}
-    for spec in specs:
-        by_name.setdefault(names[spec], spec)
-        by_name.setdefault(Path(spec).name, spec)
-    out, seen = [], set()
-    for a, b in read_pairs(path):
-        missing = next((n for n in (a, b) if n not in by_name), None)
-        if missing is not None:
-            raise InputError(f"{path}: the pairs list names {missing!r}, which is not one of the input shapes")
-        pair = (by_name[a], by_name[b])
-        if pair[0] == pair[1]:
-            raise InputError(f"{path}: {a} and {b} are one shape, paired with itself")
-        if pair in seen or (both and pair[::-1] in seen):
-            raise InputError(f"{path}: the pair {a} {b} is listed twice" + (" (in either order, with "
-                             "--both-directions each pair is matched both ways)" if both else ""))
-        seen.add(pair)
-        out.append(pair)
-    return out
-
-
 def plan_matching(specs, options: dict, out) -> MatchPlan:
     """The ``MatchPlan`` of a batch (module docstring); ``InputError`` for an unusable template or pairs list."""
     what = parse_what(options["what"])
@@ -231,7 +205,7 @@ def plan_matching(specs, options: dict, out) -> MatchPlan:
     names = dict(zip(specs, map_names(specs)))
     both, maps_dir = bool(options["both_directions"]), Path(out).absolute().parent / MAPS_FOLDER
     if what.pairs:
-        pairs = _pair_specs(options["pairs"], specs, names, both)
+        pairs = listed_pairs(options["pairs"], specs, names, both)
         table = read_landmark_csv(options["landmark_table"]) if options.get("landmark_table") else None
         found, errors = _shape_landmarks(list(dict.fromkeys(s for p in pairs for s in p)), table)
         return MatchPlan(None, {}, found, errors, names, maps_dir, pairs, both)

@@ -3,10 +3,10 @@
 Written beside the table after every ``--what match:TEMPLATE`` (or ``--pairs``) run, from the
 batch's rows (those already in the table included): the maps sorted by their
 error bar with their cycle error beside it (maps matched both ways), a
-histogram of the bars, the maps whose bar says "annotate more"
-(bar above ``api.collection.ANNOTATE_MORE`` = 0.05 sqrt(area), the mean geodesic
-error at which the shape-correspondence literature counts a map as failed) with
-the suggested next landmark, and the maps that failed.  One self-contained
+histogram of the bars, the maps whose bar says "annotate more" (bar above
+``api.collection.ANNOTATE_MORE`` = 0.05 sqrt(area), the mean geodesic error at
+which the shape-correspondence literature counts a map as failed), the largest
+bar first, with the suggested next landmark, and the maps that failed.  One self-contained
 file (the histogram is an inline PNG), written atomically.
 """
 
@@ -88,7 +88,7 @@ def report_html(rows: list[dict]) -> str:
     ok = sorted((r for r in rows if r["error"] is None and r["bar"] is not None),
                 key=lambda r: (r["bar"], r["file"], _label(r)))
     failed = [r for r in rows if r["error"] is not None]
-    more = [r for r in ok if r["bar"] > ANNOTATE_MORE]
+    more = sorted((r for r in ok if r["bar"] > ANNOTATE_MORE), key=lambda r: -r["bar"])  # the most urgent first
     out = [_intro(rows, ok, more, failed),
            ("<p>The bar is the mean error a map that fits the landmarks and distorts distances no more than this one "
             "may have, in units of the sqrt(area) of the map's source (it held the true error in 92 % of held-out "

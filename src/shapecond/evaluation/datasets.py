@@ -29,7 +29,7 @@ mirror of reference point ``j``; Ren et al.'s releases) or
 
 Without a pairs list the null shape of each class (the one whose name ends with
 the lowest number, ``cat0``, ``tr_reg_080``, else the first by name) is matched
-to the rest of its class.  A pairs list (``read_pairs``: two shape names a line,
+to the rest of its class.  A pairs list (``shapes.pairs_list.read_pairs``: two shape names a line,
 as the releases' ``test_pairs.txt``) gives exactly the pairs the field's tables
 evaluate, across classes too (gorilla → human); each source is then a group of
 its own, named after it.
@@ -45,7 +45,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
-from ..shapes.formats import check_file, off_header, read_text
+from ..shapes.formats import check_file, off_header
+from ..shapes.pairs_list import read_pairs  # noqa: F401  (read here by evaluate and its tests)
 
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 LAYOUTS = ("shared", "remeshed")
@@ -221,26 +222,6 @@ def find_classes(dataset_dir, classes=None) -> dict[str, ClassFolder]:
     if not found:
         raise InputError(f"{root}: no class folders with meshes")
     return found
-
-
-def read_pairs(path) -> list[tuple[str, str]]:
-    """The pairs of a pairs list: two shape names a line (tab, space or comma between; ``#`` comments;
-    a name may carry its mesh suffix), as the releases' ``test_pairs.txt``.  Refuses a line with another
-    number of names, a shape paired with itself and an empty list."""
-    out = []
-    for i, line in enumerate(read_text(Path(path)).splitlines(), 1):
-        words = line.split("#", 1)[0].replace(",", " ").split()
-        if not words:
-            continue
-        if len(words) != 2:
-            raise InputError(f"{path}, line {i}: expected two shape names, got {len(words)}")
-        a, b = (Path(w).stem if Path(w).suffix.lower() in MESH_SUFFIXES else w for w in words)
-        if a == b:
-            raise InputError(f"{path}, line {i}: {a} is paired with itself")
-        out.append((a, b))
-    if not out:
-        raise InputError(f"{path}: no pairs (two shape names a line)")
-    return out
 
 
 def pair_groups(dataset_dir, pairs) -> dict[str, ClassFolder]:
