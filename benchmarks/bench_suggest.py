@@ -32,7 +32,8 @@ from _results import command_line, machine, write_section  # noqa: E402
 
 
 def _pairs(a):
-    from shapecond.evaluation.datasets import find_classes, pair_groups, read_pairs
+    from shapecond.evaluation.datasets import find_classes, pair_groups
+    from shapecond.shapes.pairs_list import read_pairs
 
     groups = pair_groups(a.dataset, read_pairs(a.pairs)) if a.pairs else find_classes(a.dataset)
     return [(g, t) for g in groups.values() for t in g.targets[:a.max_targets]]

@@ -7,7 +7,8 @@ import pytest
 
 from shapecond.errors import InputError
 from shapecond.evaluation import evaluate_dataset
-from shapecond.evaluation.datasets import check_layout, find_classes, pair_groups, read_pairs
+from shapecond.evaluation.datasets import check_layout, find_classes, pair_groups
+from shapecond.shapes.pairs_list import read_pairs
 from shapecond.evaluation.report import markdown, pooled, write_report
 from tests.evaluation.test_remeshed import H, W, _strip, _write
 

@@ -46,7 +46,6 @@ import numpy as np
 
 from ..errors import InputError
 from ..shapes.formats import check_file, off_header
-from ..shapes.pairs_list import read_pairs  # noqa: F401  (read here by evaluate and its tests)
 
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 LAYOUTS = ("shared", "remeshed")

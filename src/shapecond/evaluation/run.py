@@ -24,7 +24,8 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..parallel import run_tasks
-from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count, pair_groups, read_pairs
+from ..shapes.pairs_list import read_pairs
+from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count, pair_groups
 from .deformation_level import class_scale_task, hat_scale_task, matched_level_task
 from .landmark_sets import (AT_CLASS_LEVEL, DEFAULT_LANDMARKS, LANDMARK_COST, PAPER_LANDMARKS, ShapeSetup, check_method,
                             landmark_task)
@@ -58,7 +59,7 @@ class EvaluationOptions:
     progress : progress bars on stderr.
     force : run even when the estimate is beyond ``shapecond.limits``.
     error_bars : give every matching its error bar (from δ(ε̂), ``matching.error_bar``; one δ search each).
-    pairs : the pairs to match, ((source, target) names, ...) (``datasets.read_pairs``; None: each class's
+    pairs : the pairs to match, ((source, target) names, ...) (``shapes.pairs_list.read_pairs``; None: each class's
         null shape to the rest of its class).  Each source is then a group of its own.
     n_landmarks : landmarks per source, the largest count matched (None: the paper's count for its
         TOSCA classes, ``DEFAULT_LANDMARKS`` otherwise).
