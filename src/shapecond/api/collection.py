@@ -404,6 +404,20 @@ def _pair_tasks(pairs, shapes, names: dict, table, both: bool, flags: dict):
         yield firsts[first], second, heads
 
 
+def _checked_call(template, landmarks, pairs, both_directions) -> dict | None:
+    """``match_collection``'s landmark table (``read_landmark_csv`` of a path, the dict given, or None),
+    after refusing a bad ``landmarks``, ``both_directions`` or template/pairs combination."""
+    table = read_landmark_csv(landmarks) if isinstance(landmarks, (str, os.PathLike)) else landmarks
+    if table is not None and not isinstance(table, dict):
+        raise InputError("landmarks must be None, the path of a CSV file or a dict {shape: {label: vertex}}")
+    if not isinstance(both_directions, bool):
+        raise InputError(f"both_directions must be True or False, got {both_directions!r}")
+    if (template is None) == (pairs is None):
+        raise InputError("give a template, or pairs=... without a template (template=None), not both"
+                         if pairs is not None else "give a template, or pairs=... with template=None")
+    return table
+
+
 def match_collection(template, shapes, landmarks=None, *, pairs=None, maps_dir=None, both_directions: bool = False,
                      **match_options):
     """Match ``template`` to every shape of ``shapes`` with the landmarks their files name (module docstring),
@@ -462,14 +476,7 @@ def match_collection(template, shapes, landmarks=None, *, pairs=None, maps_dir=N
     >>> list(sc.match_collection(None, shapes, pairs=[("cat", "template")], n_points=40)[1])
     ['cat.to.template']
     """
-    table = read_landmark_csv(landmarks) if isinstance(landmarks, (str, os.PathLike)) else landmarks
-    if table is not None and not isinstance(table, dict):
-        raise InputError("landmarks must be None, the path of a CSV file or a dict {shape: {label: vertex}}")
-    if not isinstance(both_directions, bool):
-        raise InputError(f"both_directions must be True or False, got {both_directions!r}")
-    if (template is None) == (pairs is None):
-        raise InputError("give a template, or pairs=... without a template (template=None), not both"
-                         if pairs is not None else "give a template, or pairs=... with template=None")
+    table = _checked_call(template, landmarks, pairs, both_directions)
     shapes = [str(s) for s in shapes]
     names = dict(zip(shapes, map_names(shapes)))
     flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
