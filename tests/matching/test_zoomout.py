@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from shapecond.errors import InputError
-from shapecond.matching.zoomout import Anchors, ZoomOutOptions, functional_map, nearest_rows, zoomout
+from shapecond.matching.zoomout import Anchors, ZoomOutOptions, farthest_points, functional_map, nearest_rows, zoomout
 from shapecond.shapes.geodesics import DistanceSolver
 from shapecond.shapes.laplace import laplace_basis
 from shapecond.shapes.synthetic import bumpy_blob
@@ -104,3 +104,16 @@ def test_the_zoomout_matcher_keeps_the_least_distorted_of_its_starts(blob, monke
     assert np.array_equal(m.source.samples[:5], lm) and m.source.n_samples == 60   # what the error bar reuses
     three = match_landmarks_only(g, g, lm[:3], lm[:3], opts)
     assert three.info["start"] == "every landmark" and three.source is None
+
+
+@pytest.mark.parametrize("decimals", [None, 1])
+def test_farthest_points_are_the_vectorised_definitions(decimals):
+    # the compiled loop must pick exactly the points of the numpy one, ties (rounded points) included
+    P = np.random.default_rng(3).standard_normal((1500, 3)) * 40.0
+    P = P if decimals is None else np.round(P / 40.0, decimals)
+    want, d = [0], np.linalg.norm(P - P[0], axis=1)
+    for _ in range(1, 300):
+        want.append(int(np.argmax(d)))
+        np.minimum(d, np.linalg.norm(P - P[want[-1]], axis=1), out=d)
+    np.testing.assert_array_equal(farthest_points(P, 300), want)
+    np.testing.assert_array_equal(farthest_points(P[:5], 9), np.arange(5))

@@ -57,6 +57,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import numba
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -174,12 +175,29 @@ def farthest_points(points: np.ndarray, m: int) -> np.ndarray:
     n = points.shape[0]
     if m >= n:
         return np.arange(n)
+    return _farthest_kernel(np.ascontiguousarray(points, dtype=np.float64), int(m))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _farthest_kernel(points, m):  # pragma: no cover - compiled
+    # the arithmetic of ``np.linalg.norm(points - p, axis=1)`` term by term (no fast-math: the same
+    # roundings), so the same points as the vectorised loop, without its m passes of temporaries
+    n = points.shape[0]
     out = np.empty(m, dtype=np.int64)
-    out[0] = 0
-    d = np.linalg.norm(points - points[0], axis=1)
-    for i in range(1, m):
-        out[i] = int(np.argmax(d))
-        np.minimum(d, np.linalg.norm(points - points[out[i]], axis=1), out=d)
+    d = np.empty(n)
+    best = 0
+    for i in range(m):
+        out[i] = best
+        x, y, z = points[best, 0], points[best, 1], points[best, 2]
+        far, arg = -1.0, 0
+        for j in range(n):
+            dx, dy, dz = points[j, 0] - x, points[j, 1] - y, points[j, 2] - z
+            r = np.sqrt(dx * dx + dy * dy + dz * dz)
+            if i == 0 or r < d[j]:
+                d[j] = r
+            if d[j] > far:  # the first largest, as np.argmax
+                far, arg = d[j], j
+        best = arg
     return out
 
 
