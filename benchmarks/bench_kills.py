@@ -1,6 +1,7 @@
 """Kill campaign: ``kill -9`` (and SIGTERM) at random moments of ``batch`` and ``evaluate``, then resume.
 
-Usage: python benchmarks/bench_kills.py [--trials 20] [--match-trials 10] [--seed 0] [--keep DIR] [--no-write]
+Usage: python benchmarks/bench_kills.py [--trials 20] [--match-trials 10] [--seed 0] [--keep DIR] [--only CMD]
+       [--no-write]
 
 Inputs are generated (no data needed): five bumpy blobs (642 vertices) for
 ``batch``; a template strip and two bent, renumbered strips with ``.lmk`` landmark
@@ -439,11 +440,13 @@ def trial(name: str, kind: str, argv: list, out_name: str, ref: Reference, work:
 
 # --- the campaign -------------------------------------------------------------------------------
 
-def measure(trials: int, match_trials: int, seed: int, root: Path) -> dict:
+def measure(trials: int, match_trials: int, seed: int, root: Path, only: str | None = None) -> dict:
     inputs = make_inputs(root / "inputs")
     rng = random.Random(seed)
     results, refs = [], {}
     for name, (kind, argv, out_name) in commands(inputs).items():
+        if only is not None and name != only:
+            continue
         slug = name.split()[0] + ("-match" if "match" in name else "")
         ref = reference(kind, argv, root / f"{slug}-reference", out_name)
         refs[name] = ref.seconds
@@ -503,17 +506,19 @@ def main(argv=None) -> None:
     parser.add_argument("--match-trials", type=int, default=10, help="trials of batch --what match:TEMPLATE")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--keep", type=Path, default=None, help="work in this (new) folder and keep it")
+    parser.add_argument("--only", choices=("batch", "batch --what match:TEMPLATE", "evaluate"), default=None,
+                        help="run the trials of this command alone (implies --no-write)")
     parser.add_argument("--no-write", action="store_true")
     args = parser.parse_args(argv)
     root = args.keep or Path(tempfile.mkdtemp(prefix="bench-kills-"))
     try:
-        m = measure(args.trials, args.match_trials, args.seed, root)
+        m = measure(args.trials, args.match_trials, args.seed, root, args.only)
     finally:
         if args.keep is None:
             shutil.rmtree(root, ignore_errors=True)
     text = section(m)
     print(text)
-    if not args.no_write:
+    if not (args.no_write or args.only):
         write_section("kills", text)
 
 
