@@ -55,6 +55,8 @@ GRACE = 5.0
 #: Row columns that differ between runs of the same rows.
 VOLATILE = ("seconds", "cpu_seconds", "peak_memory_mib", "worker", "map_file")
 RESUME_TIMEOUT = 300
+#: The measurements of the last run, for ``--from-json``.
+MEASURES = Path(__file__).with_name("out") / "bench_kills.json"
 
 
 # --- generated inputs ---------------------------------------------------------------------------
@@ -113,6 +115,10 @@ def make_inputs(root: Path) -> dict:
     _write_off(data / "strip7.off", bent(0.5), g.faces)
     _write_off(data / "strip12.off", bent(0.3) + [1.0, 2.0, 3.0], g.faces)
     return {"blobs": blobs, "coll": coll, "data": data.parent}
+
+
+#: The commands of the campaign (``commands``).
+NAMES = ("batch", "batch --what match:TEMPLATE", "evaluate")
 
 
 def commands(inputs: dict) -> dict:
@@ -232,10 +238,10 @@ def whole_file(path: Path) -> str | None:
 
 
 def leftovers(folder: Path) -> list[str]:
-    """Temporary files, journals and locks left below ``folder`` (the cache aside)."""
+    """Temporary files, journals, locks and staging folders left below ``folder`` (the cache aside)."""
     return sorted(str(p.relative_to(folder)) for p in folder.rglob(".*")
                   if "cache" not in p.relative_to(folder).parts
-                  and (p.name.endswith((".tmp", ".journal", ".lock"))))
+                  and (p.name.endswith((".tmp", ".journal", ".lock")) or p.name.startswith(".staged-")))
 
 
 def _same(a, b) -> bool:
@@ -310,10 +316,11 @@ def check_evaluation(folder: Path, since_ns: int | None) -> str | None:
 
 def first_output(kind: str, out: Path, since: int | None) -> bool:
     """Whether the run has written its first result: a row (batch; the journal's first line for Parquet),
-    or results.json (evaluate, newer than ``since``)."""
+    or results.json (evaluate, newer than ``since``, in the folder or its staging folder)."""
     try:
-        if kind == "evaluate":
-            return (out / "results.json").stat().st_mtime_ns >= (since or 0)
+        if kind == "evaluate":  # in its staging folder first (output.staged_outputs)
+            return any(p.stat().st_mtime_ns >= (since or 0)
+                       for p in [out / "results.json", *out.glob(".staged-*/results.json")] if p.exists())
         if out.suffix == ".parquet":  # a row waits in the journal until the next rewrite
             import pyarrow.parquet as pq
 
@@ -461,12 +468,12 @@ def measure(trials: int, match_trials: int, seed: int, root: Path, only: str | N
             print(f"  {k:2d} {r['signal']} {'on its first result ' if r['event'] else ''}at {r['at']:.1f} s, jobs {r['jobs']}, {r['children']} children, "
                   f"{r['done_at_kill']} done: left {r['left']}, "
                   f"resumed {r['resumed']}, whole {r['whole']} {r['message']}", file=sys.stderr, flush=True)
-    return dict(results=results, references=refs)
+    return dict(results=results, references=refs, command=command_line(), machine=machine())
 
 
 def section(m: dict) -> str:
     lines = ["## Kill campaign: kill -9 at random moments of batch and evaluate (bench_kills.py)", "",
-             f"`{command_line()}` — {machine()}.", "",
+             f"`{m.get('command') or command_line()}` — {m.get('machine') or machine()}.", "",
              "Generated inputs (5 blobs of 642 vertices, N = 60; a template and 2 strips with `.lmk` files, "
              "matched both ways, N = 30; the 3-strip evaluation class, N = 30), an empty cache per trial, "
              "the kill moment uniform in [0.05, 0.95] of a complete run's time; SIGKILL to the main process "
@@ -478,7 +485,7 @@ def section(m: dict) -> str:
              "or temporary file left, the rows (records) equal to a complete run's; evaluate's odd trials start "
              "on an earlier complete run's folder, which must not be left mixing two runs.", "",
              "| command | complete run (s) | trials | killed mid-run | with child processes at the kill | "
-             "rows on disk at the kill | processes left after 5 s | resume completed | outputs whole | "
+             "rows in the table file at the kill | processes left after 5 s | resume completed | outputs whole | "
              "rows duplicated / missing | failures |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
     for name, seconds in m["references"].items():
@@ -506,19 +513,34 @@ def main(argv=None) -> None:
     parser.add_argument("--match-trials", type=int, default=10, help="trials of batch --what match:TEMPLATE")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--keep", type=Path, default=None, help="work in this (new) folder and keep it")
-    parser.add_argument("--only", choices=("batch", "batch --what match:TEMPLATE", "evaluate"), default=None,
-                        help="run the trials of this command alone (implies --no-write)")
+    parser.add_argument("--only", choices=NAMES, default=None,
+                        help="run the trials of this command alone; they replace that command's trials in the "
+                             "last saved full run, and the section is written when there is one")
     parser.add_argument("--no-write", action="store_true")
+    parser.add_argument("--from-json", action="store_true",
+                        help=f"rebuild the section from the measurements saved in {MEASURES.name}")
     args = parser.parse_args(argv)
-    root = args.keep or Path(tempfile.mkdtemp(prefix="bench-kills-"))
-    try:
-        m = measure(args.trials, args.match_trials, args.seed, root, args.only)
-    finally:
-        if args.keep is None:
-            shutil.rmtree(root, ignore_errors=True)
+    if args.from_json:
+        m = json.loads(MEASURES.read_text())
+    else:
+        root = args.keep or Path(tempfile.mkdtemp(prefix="bench-kills-"))
+        try:
+            m = measure(args.trials, args.match_trials, args.seed, root, args.only)
+        finally:
+            if args.keep is None:
+                shutil.rmtree(root, ignore_errors=True)
+        if args.only and MEASURES.exists():  # one command's trials replace its own in the last full run
+            full = json.loads(MEASURES.read_text())
+            full["results"] = [r for r in full["results"] if r["command"] != args.only] + m["results"]
+            full["references"][args.only] = m["references"][args.only]
+            full["command"] += f"; then {m['command']}"
+            m = full
+        if set(m["references"]) == set(NAMES):
+            MEASURES.parent.mkdir(exist_ok=True)
+            MEASURES.write_text(json.dumps(m, indent=1))
     text = section(m)
     print(text)
-    if not (args.no_write or args.only):
+    if not args.no_write and set(m["references"]) == set(NAMES):
         write_section("kills", text)
 
 
