@@ -256,6 +256,61 @@ def test_what_a_compiled_library_writes_to_fd_1_is_diverted_and_python_stdout_is
     assert proc.stderr == "raw\nc-stdio\n"
 
 
+def _listing(folder):
+    return {p.name: p.read_bytes() for p in folder.iterdir()}
+
+
+def test_a_staged_set_appears_together_or_not_at_all(tmp_path):
+    out = tmp_path / "out"
+    with output.staged_outputs(out) as stage:
+        output.write_text(stage / "a.json", "1")
+        output.write_text(stage / "b.md", "one")
+        assert not (out / "a.json").exists()
+    assert _listing(out) == {"a.json": b"1", "b.md": b"one"}
+    with pytest.raises(RuntimeError):  # a failure: the earlier set stays, nothing of the new one
+        with output.staged_outputs(out) as stage:
+            output.write_text(stage / "a.json", "2")
+            raise RuntimeError("the figure failed")
+    assert _listing(out) == {"a.json": b"1", "b.md": b"one"}
+    with pytest.raises(RuntimeError):  # unless what was written must outlive the failure
+        with output.staged_outputs(out, publish_on_error=True) as stage:
+            output.write_text(stage / "a.json", "3")
+            raise RuntimeError("the figure failed")
+    assert _listing(out) == {"a.json": b"3", "b.md": b"one"}
+    (out / "c.png").mkdir()  # a folder in the way: refused before any file is moved
+    with pytest.raises(OutputError, match="c.png: is a folder"):
+        with output.staged_outputs(out) as stage:
+            output.write_text(stage / "a.json", "4")
+            output.write_text(stage / "c.png", "x")
+    assert (out / "a.json").read_text() == "3"
+    (out / "c.png").rmdir()
+    (out / "d.md").symlink_to(os.devnull)  # a stream is written to, as by atomic_open, not replaced
+    with output.staged_outputs(out) as stage:
+        output.write_text(stage / "d.md", "to the stream")
+    assert (out / "d.md").is_symlink()
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
+
+
+def test_a_killed_writers_staging_folder_is_removed_by_the_next_and_a_live_ones_kept(tmp_path):
+    import fcntl
+
+    out = tmp_path / "out"
+    (out / ".staged-00000000000000aa").mkdir(parents=True)  # left by a kill -9
+    (out / ".staged-00000000000000aa" / "results.json").write_text("half")
+    live = out / ".staged-00000000000000bb"
+    live.mkdir()
+    fd = os.open(live, os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX)  # another writer, still running
+    (out / ".staged-notours").mkdir()  # not a staging name: left alone
+    try:
+        output.write_text(out / "x", "untouched by staged writes")
+        with output.staged_outputs(out) as stage:
+            output.write_text(stage / "a.json", "1")
+        assert sorted(p.name for p in out.iterdir()) == [".staged-00000000000000bb", ".staged-notours", "a.json", "x"]
+    finally:
+        os.close(fd)
+
+
 def test_check_distinct_refuses_an_input_or_a_repeated_output_through_links(tmp_path):
     from shapecond.errors import InputError
     from shapecond.output import check_distinct

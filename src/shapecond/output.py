@@ -29,6 +29,11 @@ by :func:`atomic_open`:
 * a failure (a full disk, no permission, a folder in the way) raises one
   :class:`~shapecond.errors.OutputError` naming the file.
 
+A **set of files** that only make sense together (the evaluation's results,
+report and plots) is written by :func:`staged_outputs`: into a hidden staging
+folder beside them, then moved into place together, so that a killed run leaves
+the previous set (not a mix of two runs).
+
 Standard output carries results only: :func:`stdout_fd_diverted` points file
 descriptor 1 elsewhere for a block, so that what a compiled library prints on
 its own stdout (HiGHS prints a banner when an instance is created, before any
@@ -277,6 +282,120 @@ def atomic_open(path, mode: str = "wb", make_parents: bool = True):
             handle.close()
         with contextlib.suppress(OSError):
             os.close(fd)
+
+
+#: A staging folder's name (``staged_outputs``).
+_STAGE = re.compile(r"\.staged-[0-9a-f]{16}")
+
+
+def _remove_stale_stages(folder: Path) -> None:
+    """Remove the staging folders in ``folder`` left by killed writers: those whose ``flock`` can be taken."""
+    try:
+        import fcntl
+        import shutil
+
+        stale = [e.name for e in os.scandir(folder) if _STAGE.fullmatch(e.name)]
+    except (ImportError, OSError):
+        return
+    for name in stale:
+        try:
+            fd = os.open(folder / name, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | getattr(os, "O_NOFOLLOW", 0))
+        except OSError:  # gone, a link, not a folder: not ours to remove
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # fails while its writer is alive
+            shutil.rmtree(folder / name)  # never follows a link
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+
+
+def _new_stage(folder: Path) -> tuple[Path, int]:
+    """(a fresh staging folder in ``folder``, a descriptor holding its ``flock``)."""
+    for _ in range(100):
+        stage = folder / f".staged-{secrets.token_hex(8)}"
+        try:
+            os.mkdir(stage)
+        except FileExistsError:
+            continue
+        fd = os.open(stage, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | getattr(os, "O_NOFOLLOW", 0))
+        _hold(fd)
+        return stage, fd
+    raise OSError(errno.EEXIST, "no free staging name")
+
+
+def _publish_stage(stage: Path, folder: Path) -> None:
+    """Move the files of ``stage`` into ``folder`` in the order they were written (a stream target gets
+    the bytes instead, as with ``atomic_open``); every target checked first."""
+    files = sorted((e.stat(follow_symlinks=False).st_mtime_ns, e.name) for e in os.scandir(stage) if e.is_file())
+    for _, name in files:
+        if _stream_kind(folder / name) == "folder":
+            raise OutputError(f"{folder / name}: is a folder, not a file")
+    for _, name in files:
+        target = folder / name
+        try:
+            if _stream_kind(target) == "stream":
+                _write_stream(target, (stage / name).read_bytes())
+            else:
+                os.replace(stage / name, target)
+        except OSError as exc:
+            raise OutputError(f"{target}: cannot write ({_reason(exc)})") from None
+
+
+@contextlib.contextmanager
+def staged_outputs(folder, make_parents: bool = True, publish_on_error: bool = False):
+    """A set of files for ``folder``, written to a hidden staging folder in it and moved into place together.
+
+    The block writes its files (with :func:`atomic_open`, :func:`write_text`...) into the yielded
+    staging folder ``folder/.staged-<hex>``; when it ends without an exception they are moved into
+    ``folder`` in the order they were written, each by one rename, and the staging folder is removed.
+    A process killed while the block runs therefore leaves every file of the previous set as it was,
+    none of the new set beside them (a set of files is whole only together: a report and the results
+    it describes); only a kill within the renames, microseconds, can leave both.  A staging folder
+    left by a killed writer is removed by the next writer in the same folder (a live writer holds an
+    ``flock`` on its own).  On an exception nothing is moved (unless ``publish_on_error``) and the
+    staging folder is removed.
+
+    Parameters
+    ----------
+    folder : str or path-like, the folder the files are for.
+    make_parents : create ``folder`` and its missing parents.
+    publish_on_error : on an exception (not an interrupt) in the block, still move the files written
+        so far into place before it propagates (results that must outlive a failing figure).
+
+    Yields
+    ------
+    Path of the staging folder.
+    """
+    import shutil
+
+    folder = Path(os.fspath(folder))
+    if _stream_kind(folder) not in ("folder", None):
+        raise OutputError(f"{folder}: not a folder")
+    try:
+        if make_parents:
+            folder.mkdir(parents=True, exist_ok=True)
+        elif not folder.is_dir():
+            raise OutputError(f"{folder}: the folder does not exist")
+        _remove_stale_stages(folder)
+        stage, fd = _new_stage(folder)
+    except OutputError:
+        raise
+    except OSError as exc:
+        raise OutputError(f"{folder}: cannot write ({_reason(exc)})") from None
+    try:
+        try:
+            yield stage
+        except Exception:
+            if publish_on_error:
+                with contextlib.suppress(OutputError):
+                    _publish_stage(stage, folder)
+            raise
+        _publish_stage(stage, folder)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+        os.close(fd)
 
 
 def _identity(path):

@@ -116,6 +116,59 @@ def _fake(scores_errors):
     return Evaluation(lms, recs, settings)
 
 
+_KILLED_REPORT = """
+import os, signal, sys
+import numpy as np
+from shapecond.evaluation import Evaluation, MatchRecord
+from shapecond.evaluation.report import write_report
+from shapecond.viz import pages
+
+def ev(errors):
+    recs = [MatchRecord("c", "t", f"m{i}", 3, "faq", e, e, e, 0.0, np.zeros(1)) for i, e in enumerate(errors)]
+    lms = [dict(cls="c", method=f"m{i}", ids=[], scores={3: 0.1 * (i + 1)}, seconds=0.0) for i in range(len(errors))]
+    return Evaluation(lms, recs, dict(dataset="d", classes=["c"], methods=[f"m{i}" for i in range(len(errors))],
+                                      matchers=["faq"], n_points=10, seed=0, backend="heat", quick=False,
+                                      landmark_counts={"c": 3}))
+
+pages.write_evaluation_html = lambda *a, **k: os.kill(os.getpid(), signal.SIGKILL)  # killed at the page
+write_report(ev([5.0, 6.0, 7.0]), sys.argv[1])
+"""
+
+
+def test_a_report_killed_while_written_leaves_the_earlier_report_whole(tmp_path):
+    """A kill -9 between results.json and report.html left the folder mixing two runs (the new numbers
+    beside the earlier run's page); now the new files appear together, or none of them."""
+    import subprocess
+    import sys
+
+    def files():
+        return {p.name: p.read_bytes() for p in out.iterdir() if not p.name.startswith(".")}
+
+    out = tmp_path / "out"
+    write_report(_fake([(0.1, 1.0), (0.2, 2.0), (0.3, 3.0)]), out)
+    earlier = files()
+    assert {"results.json", "report.md", "report.html"} <= set(earlier)
+    proc = subprocess.run([sys.executable, "-c", _KILLED_REPORT, str(out)], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == -9, proc.stderr
+    assert files() == earlier
+    write_report(_fake([(0.1, 5.0), (0.2, 6.0), (0.3, 7.0)]), out)  # the next run clears what the kill left
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == []
+    assert [r["error"] for r in json.loads((out / "results.json").read_text())["records"]] == [5.0, 6.0, 7.0]
+
+
+def test_a_failing_figure_still_leaves_the_results(tmp_path, monkeypatch):
+    from shapecond.evaluation import report
+
+    def broken(*args):
+        raise RuntimeError("the figure failed")
+
+    monkeypatch.setattr(report, "plot", broken)
+    with pytest.raises(RuntimeError):
+        write_report(_fake([(0.1, 1.0), (0.2, 2.0), (0.3, 3.0)]), tmp_path / "out")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["results.json"]
+
+
 def test_spearman_against_known_orderings():
     same = _fake([(0.1, 1.0), (0.5, 2.0), (2.0, 3.0), (float("inf"), 9.0)])
     assert correlation(same, "faq")[0] == pytest.approx(1.0)

@@ -438,16 +438,23 @@ def null_shapes(ev) -> dict:
 
 def write_report(ev, out_dir) -> Path:
     """Write report.md, report.html (``viz.pages.evaluation_page``), results.json and the PNGs into
-    ``out_dir``; return the report path."""
+    ``out_dir``; return the report path.
+
+    The files appear together (``output.staged_outputs``): a run killed while writing them leaves
+    the folder's previous report, results and plots as they were, never the new results beside an
+    earlier run's report.  A figure or page that fails still leaves the new results.json (and what
+    was written before it failed) in place before the error propagates.
+    """
     from shapecond.jsonable import dumps
-    from shapecond.output import write_text
+    from shapecond.output import staged_outputs, write_text
     from shapecond.viz.pages import write_evaluation_html
 
     out_dir = Path(out_dir)
     data = dict(ev.to_dict(), correlation=correlations(by_protocol(ev, protocols(ev)[0])),
                 correlation_by_protocol={p: correlations(by_protocol(ev, p)) for p in protocols(ev)})
-    write_text(out_dir / "results.json", dumps(data, indent=1))  # first: the numbers outlive any figure
-    plots = plot(ev, out_dir)
-    path = write_text(out_dir / "report.md", markdown(ev, plots))
-    write_evaluation_html(ev, out_dir, markdown(ev, plots), null_shapes(ev))
-    return path
+    with staged_outputs(out_dir, publish_on_error=True) as stage:  # the numbers outlive a failing figure
+        write_text(stage / "results.json", dumps(data, indent=1))
+        plots = plot(ev, stage)
+        write_text(stage / "report.md", markdown(ev, plots))
+        write_evaluation_html(ev, stage, markdown(ev, plots), null_shapes(ev))
+    return out_dir / "report.md"
