@@ -47,6 +47,7 @@ import tempfile
 import time
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests.helpers: the shapes and process tree the suite uses
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _results import command_line, machine, write_section  # noqa: E402
 
@@ -71,18 +72,9 @@ def _strip(folder: Path, name: str, n: int, bend=None, seed=None) -> None:
     ``.lmk`` file of four labelled points off its axes."""
     import numpy as np
 
-    from shapecond.shapes.synthetic import plane_patch
+    from tests.helpers import bent_strip
 
-    g = plane_patch(n=n)
-    uv = g.vertices[:, :2] * [1.0, 0.55]
-    V = np.column_stack([uv, np.zeros(len(uv))])
-    if bend is not None:
-        th = uv[:, 0] / bend
-        V = np.column_stack([bend * np.sin(th), uv[:, 1], bend * (1 - np.cos(th))])
-    F = g.faces
-    if seed is not None:
-        perm = np.random.default_rng(seed).permutation(len(V))
-        V, uv, F = V[perm], uv[perm], np.argsort(perm)[F]
+    V, F, uv = bent_strip(n, bend, seed)
     _write_off(folder / f"{name}.off", V, F)
     points = {"a": (0.1, 0.1), "b": (0.85, 0.2), "c": (0.3, 0.45), "d": (0.6, 0.4)}
     ids = {k: int(np.argmin(((uv - p) ** 2).sum(1))) for k, p in points.items()}
@@ -168,15 +160,10 @@ def running(pid: int) -> bool:
 
 
 def tree(pid: int) -> set[int]:
-    """The processes below ``pid``."""
-    parents = {p: st[1] for p in _pids() if (st := _stat(p)) is not None}
-    found, todo = set(), [pid]
-    while todo:
-        parent = todo.pop()
-        kids = [p for p, q in parents.items() if q == parent]
-        found.update(kids)
-        todo += kids
-    return found
+    """The processes below ``pid`` (``tests.helpers.descendants``)."""
+    from tests.helpers import descendants
+
+    return descendants(pid)
 
 
 def group(pgid: int) -> set[int]:

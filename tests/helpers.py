@@ -288,3 +288,42 @@ def write_strip_class(root) -> Path:
     write_off(root / "strip" / "strip7.off", bent(V, 0.5), g.faces)
     write_off(root / "strip" / "strip12.off", bent(V, 0.3) + [1.0, 2.0, 3.0], g.faces)
     return root
+
+
+def bent_strip(n: int, bend=None, seed=None):
+    """(V, F, uv): a 1 × 0.55 rectangle meshed n × n, bent onto a cylinder of radius ``bend`` (an isometry)
+    and its vertices renumbered by ``seed`` on request; ``uv`` the rectangle coordinates of each vertex."""
+    from shapecond.shapes.synthetic import plane_patch
+
+    g = plane_patch(n=n)
+    uv = g.vertices[:, :2] * [1.0, 0.55]
+    V = np.column_stack([uv, np.zeros(len(uv))])
+    if bend is not None:
+        th = uv[:, 0] / bend
+        V = np.column_stack([bend * np.sin(th), uv[:, 1], bend * (1 - np.cos(th))])
+    F = g.faces
+    if seed is not None:
+        perm = np.random.default_rng(seed).permutation(len(V))
+        V, uv, F = V[perm], uv[perm], np.argsort(perm)[F]
+    return V, F, uv
+
+
+def descendants(pid: int) -> set[int]:
+    """The processes below ``pid`` (Linux /proc)."""
+    import os
+
+    parents = {}
+    for name in os.listdir("/proc"):
+        if name.isdigit():
+            try:
+                with open(f"/proc/{name}/stat", "rb") as fh:
+                    parents[int(name)] = int(fh.read().rsplit(b")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+    found, todo = set(), [pid]
+    while todo:
+        parent = todo.pop()
+        kids = [p for p, q in parents.items() if q == parent]
+        found.update(kids)
+        todo += kids
+    return found

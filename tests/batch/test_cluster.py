@@ -16,7 +16,7 @@ from shapecond.batch import schema
 from shapecond.batch.run import run_batch
 from shapecond.errors import InputError
 from shapecond.shapes.io import write_mesh
-from tests.helpers import VOLATILE, read_table, run_cli, stable, write_strip_class
+from tests.helpers import VOLATILE, descendants, read_table, run_cli, stable, write_strip_class
 
 
 def same_rows(a, b):
@@ -167,25 +167,6 @@ def test_a_batch_killed_mid_run_resumes_to_the_same_table(tmp_path):
     assert not journal.exists()
 
 
-def _descendants(pid: int) -> set[int]:
-    """Processes below ``pid`` (Linux /proc)."""
-    parents = {}
-    for name in os.listdir("/proc"):
-        if name.isdigit():
-            try:
-                with open(f"/proc/{name}/stat", "rb") as fh:
-                    parents[int(name)] = int(fh.read().rsplit(b")", 1)[1].split()[1])
-            except (OSError, IndexError, ValueError):
-                continue
-    found, todo = set(), [pid]
-    while todo:
-        parent = todo.pop()
-        kids = [p for p, q in parents.items() if q == parent]
-        found.update(kids)
-        todo += kids
-    return found
-
-
 def _running(pid: int) -> bool:
     try:
         with open(f"/proc/{pid}/stat", "rb") as fh:
@@ -213,7 +194,7 @@ def test_a_batch_killed_while_its_helper_works_leaves_no_process_and_resumes(tmp
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline, kids = time.monotonic() + 60, set()
     while proc.poll() is None and not kids and time.monotonic() < deadline:
-        kids = _descendants(proc.pid)
+        kids = descendants(proc.pid)
         time.sleep(0.01)
     assert kids, "the batch ended (or did not fork its helper) before it could be killed"
     os.kill(proc.pid, signal.SIGKILL)

@@ -9,31 +9,15 @@ from shapecond.batch import run_batch
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
 from shapecond.shapes.landmark_files import landmarks_of, pair_by_label, read_landmark_csv, read_lmk
-from shapecond.shapes.synthetic import plane_patch
-from tests.helpers import run_cli
+from tests.helpers import bent_strip, run_cli
 
-W, H = 1.0, 0.55  # a rectangle: landmarks off its axes remove its symmetries
+# bent_strip: a 1 x 0.55 rectangle; landmarks off its axes remove its symmetries
 POINTS = {"a": (0.1, 0.1), "b": (0.85, 0.2), "c": (0.3, 0.45), "d": (0.6, 0.4)}
 OPTIONS = {"points": 30}
 
 
-def _strip(n, bend=None, seed=None):
-    """A rectangle meshed n x n, bent onto a cylinder (an isometry) and renumbered on request."""
-    g = plane_patch(n=n)
-    uv = g.vertices[:, :2] * [W, H]
-    V = np.column_stack([uv, np.zeros(len(uv))])
-    if bend is not None:
-        th = uv[:, 0] / bend
-        V = np.column_stack([bend * np.sin(th), uv[:, 1], bend * (1 - np.cos(th))])
-    F = g.faces
-    if seed is not None:
-        perm = np.random.default_rng(seed).permutation(len(V))
-        V, uv, F = V[perm], uv[perm], np.argsort(perm)[F]
-    return V, F, uv
-
-
 def _write(folder, name, n, bend=None, seed=None, labels="abcd"):
-    V, F, uv = _strip(n, bend, seed)
+    V, F, uv = bent_strip(n, bend, seed)
     (folder / f"{name}.off").write_text(f"OFF\n{len(V)} {len(F)} 0\n" + "".join(f"{x} {y} {z}\n" for x, y, z in V)
                                         + "".join(f"3 {a} {b} {c}\n" for a, b, c in F))
     if labels:
