@@ -12,6 +12,7 @@ so what a compiled library prints on its own can never corrupt ``--json``.
 
 from __future__ import annotations
 
+import difflib
 import importlib
 import os
 import pkgutil
@@ -65,6 +66,21 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
     print(f"warning: {text}", file=sys.stderr)
 
 
+def _usage_message(exc: click.UsageError) -> str:
+    """The first line of a usage error; a misspelt option is worded here, not by click.
+
+    click's wording and its suggestions changed between the versions we allow
+    (8.2 said ``No such option: --refin`` and offered ``--target-factor`` for
+    ``--resolve-fractio``), so the closest of the command's own option names
+    (``difflib``, the same matcher click uses) are offered here.
+    """
+    if not isinstance(exc, click.NoSuchOption) or exc.ctx is None:
+        return exc.format_message().splitlines()[0]
+    names = [n for p in exc.ctx.command.params for n in p.opts + p.secondary_opts if n.startswith("-")]
+    close = difflib.get_close_matches(exc.option_name, names, n=3)
+    return f"No such option '{exc.option_name}'" + (f"; did you mean {', '.join(close)}?" if close else "")
+
+
 def main(argv=None) -> None:
     """Console-script entry point."""
     warnings.showwarning = _one_line_warning
@@ -76,7 +92,7 @@ def main(argv=None) -> None:
         sys.exit(0)
     except click.UsageError as exc:
         hint = f" (see: shapecond {exc.ctx.info_name} --help)" if exc.ctx and exc.ctx.parent else ""
-        _fail(exc.format_message().splitlines()[0] + hint, 2)
+        _fail(_usage_message(exc) + hint, 2)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
     except click.Abort:
