@@ -17,7 +17,8 @@ exclusive (a stage called inside another is not counted twice):
 * the Laplace–Beltrami bases (``shapes.laplace.laplace_basis``);
 * the anchors' sides and harmonic coordinates (``matching.zoomout.Anchors.oriented`` / ``harmonic``);
 * ZoomOut (``matching.zoomout.zoomout``), its final nearest-neighbour query over all
-  vertices shown apart (the last ``nearest_rows`` call);
+  vertices shown apart (the last ``nearest_rows`` call, or ``_nearest_in_regions`` where the final
+  pass searches cell regions);
 * the error bar (``matching.error_bar.bar_and_samples``);
 * the rest (loading, the extension of the sample map, imports).
 
@@ -93,6 +94,11 @@ _nearest, _calls = Z.nearest_rows, []
 def nearest(X, Y):  # the last call (all source vertices) is the final query
     t = time.process_time(); out = _nearest(X, Y); _calls.append(time.process_time() - t); return out
 Z.nearest_rows = nearest
+_regions = getattr(Z, "_nearest_in_regions", None)  # the final pass searched in cell regions (newer trees)
+def in_regions(*a):
+    t = time.process_time(); out = _regions(*a); _calls.append(time.process_time() - t); return out
+if _regions is not None:
+    Z._nearest_in_regions = in_regions
 t0 = time.process_time()
 r = sc.match(SOURCE, TARGET, LS, LT, matcher=MATCHER)
 total = time.process_time() - t0

@@ -75,5 +75,5 @@ def test_zoomout_with_the_harmonic_block_still_recovers_the_identity(harmonic):
     if harmonic:
         anchors = anchors.harmonic(g, g, 0.05)
         assert anchors.source_harmonic is not None
-    T = zoomout(b, b, g.vertices, start, anchors, ZoomOutOptions(k_start=10, step=10))
+    T = zoomout(b, b, (g.vertices, g.vertices), start, anchors, ZoomOutOptions(k_start=10, step=10))
     assert np.mean(T == np.arange(g.n_vertices)) > 0.95

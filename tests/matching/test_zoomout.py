@@ -8,6 +8,7 @@ from shapecond.matching.zoomout import Anchors, ZoomOutOptions, farthest_points,
 from shapecond.shapes.geodesics import DistanceSolver
 from shapecond.shapes.laplace import laplace_basis
 from shapecond.shapes.synthetic import bumpy_blob
+from shapecond.shapes.validate import make_geometry
 
 
 def test_nearest_rows_is_the_brute_force_argmin():
@@ -51,10 +52,10 @@ def test_zoomout_recovers_the_identity_from_a_noisy_start_and_keeps_the_landmark
     lm = np.array([0, 100, 400])
     rows = DistanceSolver(g).distances(lm)
     anchors = Anchors(lm, lm, rows, rows)
-    T = zoomout(b, b, g.vertices, start, anchors, ZoomOutOptions(k_start=10, step=10))
+    T = zoomout(b, b, (g.vertices, g.vertices), start, anchors, ZoomOutOptions(k_start=10, step=10))
     assert np.mean(T == np.arange(g.n_vertices)) > 0.95
     np.testing.assert_array_equal(T[lm], lm)
-    again = zoomout(b, b, g.vertices, start, anchors, ZoomOutOptions(k_start=10, step=10))
+    again = zoomout(b, b, (g.vertices, g.vertices), start, anchors, ZoomOutOptions(k_start=10, step=10))
     np.testing.assert_array_equal(T, again)  # deterministic
 
 
@@ -64,15 +65,15 @@ def test_anchors_pull_the_map_to_the_landmarks(blob):
     start = np.zeros(g.n_vertices, dtype=np.int64)
     lm = np.array([0, 150, 300, 450, 600])
     rows = DistanceSolver(g).distances(lm)
-    plain = zoomout(b, b, g.vertices, start, None, ZoomOutOptions(k_start=10, step=10))
-    anchored = zoomout(b, b, g.vertices, start, Anchors(lm, lm, rows, rows), ZoomOutOptions(k_start=10, step=10))
+    plain = zoomout(b, b, (g.vertices, g.vertices), start, None, ZoomOutOptions(k_start=10, step=10))
+    anchored = zoomout(b, b, (g.vertices, g.vertices), start, Anchors(lm, lm, rows, rows), ZoomOutOptions(k_start=10, step=10))
     assert np.mean(anchored == np.arange(g.n_vertices)) > np.mean(plain == np.arange(g.n_vertices)) + 0.2
 
 
 def test_a_map_that_does_not_fit_is_an_input_error(blob):
     g, b = blob
     with pytest.raises(InputError, match="does not fit"):
-        zoomout(b, b, g.vertices, np.zeros(5, dtype=np.int64))
+        zoomout(b, b, (g.vertices, g.vertices), np.zeros(5, dtype=np.int64))
     with pytest.raises(InputError, match="k_start"):
         ZoomOutOptions(k_start=0).levels(50)
 
@@ -117,3 +118,39 @@ def test_farthest_points_are_the_vectorised_definitions(decimals):
         np.minimum(d, np.linalg.norm(P - P[want[-1]], axis=1), out=d)
     np.testing.assert_array_equal(farthest_points(P, 300), want)
     np.testing.assert_array_equal(farthest_points(P[:5], 9), np.arange(5))
+
+
+def test_the_final_pass_searched_in_cell_regions_finds_what_the_full_search_finds():
+    """A deformed copy (a non-rigid bend: a different basis, the identity the true map) refined from a
+    noisy start: the final pass's regions give the full search's map on (nearly) every vertex."""
+    from shapecond.matching import zoomout as Z
+
+    g = bumpy_blob(subdivisions=4)
+    V = g.vertices.copy()
+    V[:, 2] += 0.3 * V[:, 0] ** 2  # bend
+    h = make_geometry(V, g.faces)
+    bg, bh = laplace_basis(g, k=60, cache=False), laplace_basis(h, k=60, cache=False)
+    start = _neighbour_map(g, 1)
+    opts = ZoomOutOptions(k_start=10, step=10)
+    regions = zoomout(bg, bh, (g.vertices, h.vertices), start, None, opts)
+    shipped = Z._nearest_in_regions
+    Z._nearest_in_regions = lambda X, Y, cell, regions: Z.nearest_rows(X, Y)
+    try:
+        full = zoomout(bg, bh, (g.vertices, h.vertices), start, None, opts)
+    finally:
+        Z._nearest_in_regions = shipped
+    assert np.mean(regions == full) > 0.995
+    error = np.linalg.norm(g.vertices[full] - g.vertices, axis=1)  # the true map is the identity
+    assert error.mean() < 0.05 * np.ptp(g.vertices, axis=0).max()  # the comparison is of good maps (4 %)
+
+
+def test_a_collapsed_map_still_searches_a_cell_worth_of_target_vertices():
+    from shapecond.matching.zoomout import CELL_NEIGHBOURS, _search_regions
+
+    g = bumpy_blob(subdivisions=3)
+    S = farthest_points(g.vertices, 40)
+    regions = _search_regions(g.vertices[S], g.vertices, np.zeros(S.size, dtype=np.int64))
+    need = -(-(CELL_NEIGHBOURS + 1) * g.n_vertices // S.size)
+    assert all(r.size >= need and 0 in r for r in regions)
+    spread = _search_regions(g.vertices[S], g.vertices, S)  # the identity: each region holds its cell
+    assert all(s in r for s, r in zip(S, spread))

@@ -153,7 +153,7 @@ def dense_stage(source_geometry, target_geometry, initial, anchors: Anchors | No
     if anchors is not None:
         anchors = anchors.oriented(source_geometry, target_geometry).harmonic(
             source_geometry, target_geometry, anchor_width(bs, bt, options.zoomout))
-    return zoomout(bs, bt, source_geometry.vertices, initial, anchors, options.zoomout)
+    return zoomout(bs, bt, (source_geometry.vertices, target_geometry.vertices), initial, anchors, options.zoomout)
 
 
 def match_surfaces(source: SampledSurface, target: SampledSurface, landmarks_source, landmarks_target,

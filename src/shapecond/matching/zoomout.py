@@ -46,6 +46,15 @@ vertices, ``.vts`` ground truth), are what make it a landmark-guided stage:
   target vertex, as the accelerated ZoomOut of the paper does; only the final
   map is computed for every source vertex.  Same errors as the full iteration
   (0.0289 against 0.0288 on six pairs), 3× faster.
+* **The final map searched near the subsample's.**  The last pass maps every source vertex, and a
+  search among every target vertex costs ``n_s n_t k`` (15 of 60 s CPU for two 52k-vertex meshes).
+  A vertex of the cell of subsample point ``s`` is searched only among the target vertices within
+  ``r_s`` of ``T(s)``, where ``r_s`` is the largest distance from ``T(s)`` to the images of the
+  subsample points nearest ``s`` (``CELL_NEIGHBOURS``: the mean number of neighbours of a point
+  in a planar triangulation, 6, by Euler's formula): a map continuous at the subsample's scale sends
+  the cell between those images, and where it tears the radius grows with the tear.  What the
+  restriction changes against the full search is measured in ``benchmarks/RESULTS.md``
+  (section ``final-pass``).
 
 Nearest neighbours are found by blocked products in float32 (a k-d tree is
 slower than a brute-force product beyond about 20 dimensions); ties go to the
@@ -68,6 +77,8 @@ from shapecond.shapes.laplace import LaplaceBasis
 
 #: Source rows per block of the nearest-neighbour products.
 BLOCK = 2048
+#: Subsample neighbours whose images bound a cell's search in the final pass (module docstring).
+CELL_NEIGHBOURS = 6
 
 
 @dataclass(frozen=True)
@@ -221,14 +232,15 @@ def anchor_width(source: LaplaceBasis, target: LaplaceBasis, options: ZoomOutOpt
     return math.pi / math.sqrt(max(float(target.evals[k_end - 1]), 1e-12))
 
 
-def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarray, initial: np.ndarray,
+def zoomout(source: LaplaceBasis, target: LaplaceBasis, points: tuple[np.ndarray, np.ndarray], initial: np.ndarray,
             anchors: Anchors | None = None, options: ZoomOutOptions = ZoomOutOptions()) -> np.ndarray:
     """Refine the vertex map ``initial`` (source → target) by landmark-anchored ZoomOut.
 
     Parameters
     ----------
     source, target : LaplaceBasis of the two shapes.
-    source_points : (n_s, 3) source vertex positions (for the subsample only).
+    points : (n_s, 3) source and (n_t, 3) target vertex positions (the subsample, the final pass's
+        search regions).
     initial : (n_s,) int target vertex of every source vertex.
     anchors : landmark pairs with their distance rows (None: plain ZoomOut).
     options : ZoomOutOptions.
@@ -243,7 +255,7 @@ def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarra
     levels = options.levels(min(source.k, target.k))
     k_end = levels[-1]
     blocks = anchors.blocks(anchor_width(source, target, options)) if anchors is not None else []
-    points = np.asarray(source_points, dtype=np.float64)
+    points, target_points = (np.asarray(p, dtype=np.float64) for p in points)
     S = farthest_points(points, options.subsample_factor * k_end)
     _, cell = cKDTree(points[S]).query(points)
     w = np.bincount(cell, weights=source.mass, minlength=S.size)
@@ -258,7 +270,8 @@ def zoomout(source: LaplaceBasis, target: LaplaceBasis, source_points: np.ndarra
         TS = _pointwise(phi_s[:, :k], Y, [(a[S], b) for a, b in blocks], scales)
     C = functional_map(phi_s, w, phi_t[TS], gram)
     Y = phi_t @ C.T
-    T = _pointwise(source.evecs[:, :k_end], Y, blocks, _whitening(phi_s, Y, TS, w, blocks, S))
+    regions = _search_regions(points[S], target_points, TS)
+    T = _pointwise(source.evecs[:, :k_end], Y, blocks, _whitening(phi_s, Y, TS, w, blocks, S), (cell, regions))
     if anchors is not None:
         T[anchors.source] = anchors.target
     return T
@@ -277,11 +290,45 @@ def _whitening(X, Y, TS, w, blocks, S) -> list[float]:
     return scales
 
 
-def _pointwise(X: np.ndarray, Y: np.ndarray, blocks, scales) -> np.ndarray:
+def _pointwise(X: np.ndarray, Y: np.ndarray, blocks, scales, regions=None) -> np.ndarray:
     """Nearest rows of ``[X, c_1 a_1, ...]`` among ``[Y, c_1 b_1, ...]`` for the blocks ``(a_i, b_i)``
-    at scales ``c_i``."""
+    at scales ``c_i``; ``regions``: (cell of every row of X, candidate rows of Y of every cell), or
+    None to search every row of Y."""
     xs, ys = [X.astype(np.float32)], [Y.astype(np.float32)]
     for (a, b), c in zip(blocks, scales):
         xs.append(np.float32(c) * a)
         ys.append(np.float32(c) * b)
-    return nearest_rows(np.hstack(xs), np.hstack(ys))
+    if regions is None:
+        return nearest_rows(np.hstack(xs), np.hstack(ys))
+    return _nearest_in_regions(np.hstack(xs), np.hstack(ys), *regions)
+
+
+def _search_regions(subsample_points: np.ndarray, target_points: np.ndarray, images: np.ndarray) -> list:
+    """Candidate target vertices of every subsample cell (module docstring): those within the
+    largest distance from the cell's image to its ``CELL_NEIGHBOURS`` nearest cells' images, and at
+    least the target vertices of as many cells' worth of area (where the images collapse), sorted."""
+    m, n_t = subsample_points.shape[0], target_points.shape[0]
+    k = min(CELL_NEIGHBOURS + 1, m)
+    _, near = cKDTree(subsample_points).query(subsample_points, k=k)
+    at = target_points[images]
+    radius = np.linalg.norm(at[near.reshape(m, -1)] - at[:, None, :], axis=2).max(axis=1)
+    tree = cKDTree(target_points)
+    floor, _ = tree.query(at, k=min(n_t, -(-k * n_t // m)))
+    radius = np.maximum(radius, floor.reshape(m, -1)[:, -1])
+    return [np.sort(np.asarray(r, dtype=np.int64)) for r in tree.query_ball_point(at, radius)]
+
+
+def _nearest_in_regions(X: np.ndarray, Y: np.ndarray, cell: np.ndarray, regions: list) -> np.ndarray:
+    """``nearest_rows`` with the rows of cell ``c`` searched among ``regions[c]`` only."""
+    X = np.ascontiguousarray(X, dtype=np.float32)
+    Y = np.ascontiguousarray(Y, dtype=np.float32)
+    half_norms = 0.5 * np.einsum("ij,ij->i", Y, Y)
+    out = np.empty(X.shape[0], dtype=np.int64)
+    order = np.argsort(cell, kind="stable")
+    bounds = np.searchsorted(cell[order], np.arange(len(regions) + 1))
+    for c, cand in enumerate(regions):
+        rows = order[bounds[c]:bounds[c + 1]]
+        if rows.size:
+            score = X[rows] @ Y[cand].T - half_norms[cand]
+            out[rows] = cand[np.argmax(score, axis=1)]
+    return out
