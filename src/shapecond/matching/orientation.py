@@ -35,6 +35,22 @@ much as the ``L`` landmark anchors of the dense stage (each ``|s_ab| ≤ 1`` has
 function): the orientation decides between maps the spectra cannot separate,
 and leaves the localisation to the basis.
 
+Known failure, measured and not fixed: the sides of a pair whose landmarks sit at two
+extremities that a pose moves (the two hands of a human) disagree between the poses across the
+body between them.  TOSCA_r david1 → david6 with its six HKS landmarks (three on each hand): under
+the *true* map the nine hand-to-hand sides correlate 0.28 and 23 % of the reference points, on the
+torso, have a strong side of the opposite sign; the dense stage errs 45.6 ×10⁻³ sqrt(area) with
+the sides and 23.4 without them (35.2 and 25.0 with the first three landmarks), so here a correct
+landmark costs accuracy.  Tried and not adopted: the sides read off the gradients of the landmarks'
+harmonic coordinates (conformally invariant angles, no cut locus).  They agree better under the
+true map (SMAL_r 0.80-0.95 against 0.62-0.76) and fix that pair (23.4), but the matching ends worse
+on average: six landmarks, FAQ start, every landmark method, TOSCA_r test pairs 17.4 → 18.9 (17 of
+40 worse by 5 %, 13 better) and SMAL_r 43.6 → 46.2 (25 of 40 worse, 5 better), in the project's
+benchmark ``sides``.  Weighting the block by its
+effective number of independent columns (a participation ratio) fixed the pair and cost 3-4 ×10⁻³
+on cat2 → cat3; whitening every column on its own or sharing the block's weight by column
+multiplicity left it at 39-42.
+
 The outward normal: face normals by the file's vertex order, the whole mesh
 flipped when its signed volume is negative (a closed surface given inside
 out); meshes are assumed consistently oriented otherwise (a few flipped
