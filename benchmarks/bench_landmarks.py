@@ -33,7 +33,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import machine, peak_rss_mb, write_section  # noqa: E402
 
-from shapecond.selection.cnbs import cnbs_landmarks, full_heat_map, heat_map  # noqa: E402
+from shapecond.selection.cnbs import CNBSOptions, cnbs_landmarks, full_heat_map, heat_map  # noqa: E402
 from shapecond.selection.fps import fps_landmarks  # noqa: E402
 from shapecond.selection.pls import pls_landmarks  # noqa: E402
 from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
@@ -87,7 +87,7 @@ def part_animal():
     x = np.abs(g.vertices[shape.samples[:n], 0])
     plane = x < 1e-9
     t0 = time.perf_counter()
-    out = cnbs_landmarks(shape.D, n, 3, keep_heat_maps=True)
+    out = cnbs_landmarks(shape.D, n, 3, options=CNBSOptions(keep_heat_maps=True))
     t_cnbs = time.perf_counter() - t0
     steps, L = [], []
     for c, hm in zip(out["landmarks"], out["heat_maps"]):
@@ -130,7 +130,7 @@ def part_tosca(data, classes):
         n = shape.n_samples
         t_shape = time.perf_counter() - t0
         t1 = time.perf_counter()
-        cn = cnbs_landmarks(shape.D, n, 3, keep_heat_maps=True)
+        cn = cnbs_landmarks(shape.D, n, 3, options=CNBSOptions(keep_heat_maps=True))
         t_cnbs = time.perf_counter() - t1
         chosen = {"fps": fps_landmarks(shape.D, n, 3, seed=0), "pls": pls_landmarks(shape.D, n, 3)[0],
                   "cnbs": cn["landmarks"]}

@@ -19,12 +19,12 @@ import numpy as np
 from ..checks import check_choice, check_float, check_int, parse_ids
 from ..deformation.local_score import ZERO_TOL, LocalProblem
 from ..errors import InputError
-from ..selection import check_method_options, select_landmarks
+from ..selection import select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
 from ..symmetry.report import score_report
 from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
-from .options import EFFORTS, ShapeOptions, refuse_unknown
+from .options import EFFORTS, ShapeOptions, landmark_options, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 from .settings import score_settings
 
@@ -128,24 +128,20 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     (3, 'fps')
     """
     opts, method_kw = ShapeOptions.take(options, "landmarks", others=set(options))
-    check_method_options(method, method_kw)  # a misspelt option is refused, naming the method's options
     effort = check_choice(effort, "effort", EFFORTS)
     ids = parse_ids(user_landmarks, "user_landmarks")
     if method == "user":
         if not ids:
             raise InputError("method 'user' needs user_landmarks")
         method_kw["ids"] = ids
+    # a misspelt option is refused, naming the method's options, before any work
+    chosen, runtime = landmark_options(method, opts.seed, {**method_kw, "scores": scores, "effort": effort})
     k = check_int(k, "k", lo=0)
     shape = shape_of(x, n_points, ids, opts)
     guard_landmarks(shape, k, method, scores, opts.force)
     if opts.progress and method in ("cnbs", "cnbs-scale"):
-        method_kw.setdefault("progress", _cnbs_progress(k))
-    return _select(shape, k, method, opts.seed, scores, effort, method_kw)
-
-
-def _select(shape, k, method, seed, scores, effort, method_kw) -> LandmarkResult:
-    sel = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **method_kw)
-    return promote(sel, LandmarkResult)
+        runtime.setdefault("progress", _cnbs_progress(k))
+    return promote(select_landmarks(shape, k, method, chosen, **runtime), LandmarkResult)
 
 
 def _cnbs_progress(k: int):
