@@ -29,25 +29,31 @@ _SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "large
 _DECLARED = {"lh05": LH05Options, "faq": FAQOptions}
 
 
-def _matcher_options(matcher: str, options: dict) -> dict:
-    """The sample matcher's own options, refused before any work when unknown."""
+def _matcher_options(matcher: str, options: dict, seed: int):
+    """The sample matcher's options object (``LH05Options`` or ``FAQOptions``, FAQ's seeded by ``seed``;
+    None for zoomout) from ``match``'s other keywords, an unknown one refused before any work."""
     check_choice(matcher, "matcher", MATCHERS)
     declared = _DECLARED.get(matcher)  # zoomout declares none
     known = set() if declared is None else {f.name for f in fields(declared)} - {"seed"}  # seed: match's own
     if set(options) - known:  # refused before the geodesics, not as a TypeError after them
         raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
                          f"{matcher!r} (its options: {', '.join(sorted(known)) or 'none'})")
-    return options
+    if declared is None:
+        return None
+    return declared(**options, **({"seed": seed} if declared is FAQOptions else {}))
 
 
 def _match_options(matcher, n_points, dense, samples, options: dict):
     """``MatchOptions`` and the load settings from ``match``'s keywords (each checked once)."""
     settings = {k: options.pop(k, v) for k, v in _SETTINGS.items()}
+    seed = check_seed(settings["seed"])
+    if "k" in options:
+        options["k"] = check_int(options["k"], "k", lo=1)
     opts = MatchOptions(matcher=matcher, n_points=check_int(n_points, "n_points", lo=3),
                         backend=check_choice(settings["backend"], "backend", BACKENDS),
-                        seed=check_seed(settings["seed"]), dense=dense, samples=samples,
+                        seed=seed, dense=dense, samples=samples,
                         cache=check_flag(settings["cache"], "cache"),
-                        matcher_options=_matcher_options(matcher, options))
+                        matcher_options=_matcher_options(matcher, options, seed))
     flags = {k: check_flag(settings[k], k) for k in ("largest_component", "force", "error_bar")}
     flags["suggest"] = check_int(settings["suggest"], "suggest", lo=0)
     if flags["suggest"] and not flags["error_bar"]:
@@ -69,8 +75,7 @@ def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
             raise InputError(f"{name} landmark {bad[0]} is out of range (rows 0..{D.shape[0] - 1})")
     if tgt.shape[0] < src.shape[0]:
         raise InputError(f"the target matrix has fewer rows ({tgt.shape[0]}) than the source ({src.shape[0]})")
-    sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, opts.matcher, seed=opts.seed,
-                       **opts.matcher_options)
+    sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, opts.matcher_options)
     summary.update(n_points=int(src.shape[0]), matcher_info=sm.info)
     return MatchResult(np.asarray(sm.t, dtype=np.int64), summary)
 
