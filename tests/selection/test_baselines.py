@@ -9,7 +9,7 @@ from shapecond.selection import LandmarkOptions, select_landmarks
 from shapecond.selection.fps import fps_landmarks
 from shapecond.selection.hks import _local_maxima, heat_kernel_signature, hks_landmarks
 from shapecond.selection.pls import _entropy, distance_histograms, pls_landmarks
-from shapecond.shapes.metric import build_metric_shape, from_distance_matrix
+from shapecond.shapes.metric import Sampling, build_metric_shape, from_distance_matrix
 from shapecond.shapes.synthetic import animal
 from shapecond.selection.user import UserLandmarks
 
@@ -22,7 +22,7 @@ def _dist(P):
 @pytest.fixture(scope="module")
 def animal_shape():
     """The generated animal, coarse (about 1.8k vertices), 60 samples."""
-    return build_metric_shape(animal(delta=0.05, resolution=0.06), n_points=60, cache=False)
+    return build_metric_shape(animal(delta=0.05, resolution=0.06), n_points=60, sampling=Sampling(cache=False))
 
 
 def _star(seed=0):
@@ -179,7 +179,7 @@ def test_cnbs_local_on_a_small_mesh():
     from shapecond.shapes.synthetic import bumpy_blob
 
     g = bumpy_blob(subdivisions=2)
-    shape = build_metric_shape(g, n_points=30, target="samples", cache=False)
+    shape = build_metric_shape(g, n_points=30, sampling=Sampling(target="samples", cache=False))
     r = select_landmarks(shape, 3, "cnbs-local")
     assert r.method == "cnbs-local" and len(set(r.vertices)) == 3
     assert all(b <= a * (1 + 1e-9) for a, b in zip(r.scores, r.scores[1:]))

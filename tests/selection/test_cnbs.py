@@ -103,11 +103,11 @@ def test_argmin_tie_breaks_by_move_then_index():
 def test_animal_first_landmark_off_the_mirror_plane():
     """On the near-symmetric animal (N = 100) the first CNBS landmark is off the mirror plane: the
     mirror fixes the samples on the plane, so fixing one of them lowers σ least."""
-    from shapecond.shapes.metric import build_metric_shape
+    from shapecond.shapes.metric import Sampling, build_metric_shape
     from shapecond.shapes.synthetic import animal
 
     g = animal(delta=0.05)
-    shape = build_metric_shape(g, n_points=100, cache=False)
+    shape = build_metric_shape(g, n_points=100, sampling=Sampling(cache=False))
     x = np.abs(g.vertices[shape.samples[:100], 0])
     on_plane = x < 1e-9
     assert on_plane.sum() >= 3

@@ -75,10 +75,10 @@ def test_resolution_rule(lo, hi, rms, disp, r, flag):
 
 
 def _animal_shape(delta, n):
-    from shapecond.shapes.metric import build_metric_shape
+    from shapecond.shapes.metric import Sampling, build_metric_shape
     from shapecond.shapes.synthetic import animal
 
-    return build_metric_shape(animal(delta=delta), n_points=n, target="samples")
+    return build_metric_shape(animal(delta=delta), n_points=n, sampling=Sampling(target="samples"))
 
 
 def _mirror_map(shape):

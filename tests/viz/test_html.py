@@ -92,7 +92,7 @@ def test_html_shows_the_png_colours(heat):
 
 
 def test_decimation_keeps_ids_and_says_so():
-    g = generate("sphere", subdivisions=5)  # 10,242 vertices
+    g = generate("sphere", {"subdivisions": 5})  # 10,242 vertices
     ids = np.arange(g.n_vertices) * 3 + 7
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 2], landmarks=[5, 9])], ids=ids)
     small, note = H.decimate(scene, 2000)
@@ -105,7 +105,7 @@ def test_decimation_keeps_ids_and_says_so():
 
 @pytest.mark.slow
 def test_a_50k_vertex_page_is_a_few_mb():
-    g = generate("sphere", subdivisions=7)  # 163,842 vertices: decimated to 50k at most
+    g = generate("sphere", {"subdivisions": 7})  # 163,842 vertices: decimated to 50k at most
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 0])])
     document = H.page("big", [H.viewer(scene)])
     assert len(document.encode()) < 5e6
@@ -203,7 +203,7 @@ def _check(page, errors, requests, path: Path, k: int = 0):
 
 def test_browser_heatmap_page(browser, tmp_path):
     # an unreferenced first vertex: the input's ids are 1..n, not the internal 0..n-1
-    g = generate("animal", resolution=0.05)
+    g = generate("animal", {"resolution": 0.05})
     V = np.vstack([[9.0, 9.0, 9.0], g.vertices])
     res = sc.heatmap((V, g.faces + 1), n_points=20, cache=False, effort="quick")
     path = Path(res.to_html(tmp_path / "heat.html"))
@@ -252,7 +252,7 @@ def test_browser_local_page(browser, tmp_path, capsys):
 
 
 def test_browser_decimated_page(browser, tmp_path):
-    g = generate("sphere", subdivisions=5)
+    g = generate("sphere", {"subdivisions": 5})
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 2])], ids=np.arange(g.n_vertices) + 100)
     path = tmp_path / "dec.html"
     path.write_text(H.page("decimated", [H.viewer(scene, max_vertices=1500)]))
@@ -262,7 +262,7 @@ def test_browser_decimated_page(browser, tmp_path):
 
 
 def test_browser_evaluation_report(browser, tmp_path):
-    from shapecond.evaluation import evaluate_dataset
+    from shapecond.evaluation import EvaluationOptions, evaluate_dataset
     from shapecond.evaluation.report import write_report
     from shapecond.shapes.synthetic import plane_patch
 
@@ -275,7 +275,7 @@ def test_browser_evaluation_report(browser, tmp_path):
             f.write(f"OFF\n{len(V)} {len(g.faces)} 0\n")
             f.writelines(f"{x} {y} {z}\n" for x, y, z in V)
             f.writelines(f"3 {a} {b} {c}\n" for a, b, c in g.faces)
-    ev = evaluate_dataset(root, methods=("fps", "hks"), matchers=("faq",), n_points=16, cache=False)
+    ev = evaluate_dataset(root, options=EvaluationOptions(methods=("fps", "hks"), matchers=("faq",), n_points=16, cache=False))
     write_report(ev, tmp_path / "out")
     path = tmp_path / "out" / "report.html"
     document = path.read_text()

@@ -150,7 +150,7 @@ def test_guess_up_finds_the_feet_whatever_the_axis():
     from shapecond.shapes.synthetic import generate
     from shapecond.viz.scene import guess_up, up_frame
 
-    g = generate("animal", resolution=0.05)
+    g = generate("animal", {"resolution": 0.05})
     for up, V in rotations(g).items():
         shape = SimpleNamespace(vertices=V, faces=g.faces)
         assert guess_up(shape) == up and guess_up(shape, shape) == up
