@@ -182,17 +182,19 @@ def part_pictures(data):
 
 def pictures(cls, g, shape, chosen, values, sigma_before):
     from shapecond.viz.heatmap import render_heatmap_png
-    from shapecond.viz.render import render_rows
+    from shapecond.viz.render import Look, render_rows
+    from shapecond.viz.scene import HeatMapStyle
 
     OUT.mkdir(exist_ok=True)
     vals = np.asarray(values, dtype=float).copy()
     finite = vals[np.isfinite(vals)]
     vals = np.where(np.isnan(vals), finite.max(), vals)
-    render_heatmap_png(shape, vals, OUT / f"{cls}0_heatmap.png", title=f"{cls}0: σ with each point fixed "
-                       f"(N = {shape.n_samples}, before: {fmt(sigma_before)})", ply=str(OUT / f"{cls}0_heatmap.ply"))
+    title = f"{cls}0: σ with each point fixed (N = {shape.n_samples}, before: {fmt(sigma_before)})"
+    render_heatmap_png(shape, vals, OUT / f"{cls}0_heatmap.png", ply=str(OUT / f"{cls}0_heatmap.ply"),
+                       style=HeatMapStyle(title=title))
     rows = [dict(values=None, landmarks=[int(shape.samples[i]) for i in chosen[m]], label=m.upper())
             for m in ("fps", "pls", "cnbs")]
-    render_rows(OUT / f"{cls}0_landmarks.png", g.vertices, g.faces, rows, title=f"{cls}0: 3 landmarks")
+    render_rows(OUT / f"{cls}0_landmarks.png", g.vertices, g.faces, rows, look=Look(title=f"{cls}0: 3 landmarks"))
 
 
 def part_timing(data, k=15):

@@ -316,7 +316,8 @@ PATHS = dict(source="my shapes/a.off", target="b.off", output="map.txt", html="p
 
 def test_match_page_knows_the_command_and_the_suggestions(pair_result, tmp_path):
     src, tgt = pair_result.drawing[:2]
-    document = pages.result_page(pair_result, command=PATHS, suggestions=[(7, "bar after: 0.021"), (90, None)])
+    document = pages.result_page(pair_result, pages.PageOptions(command=PATHS,
+                                                                suggestions=[(7, "bar after: 0.021"), (90, None)]))
     data = _data(document)[0]
     p = data["picking"]
     assert (p["source"], p["target"], p["output"], p["html"]) == ("'my shapes/a.off'", "b.off", "map.txt", "page.html")
@@ -329,28 +330,24 @@ def test_match_page_knows_the_command_and_the_suggestions(pair_result, tmp_path)
     for bad in (dict(command=dict(sorce="a.off")), dict(suggestions=[(src.n_vertices, "x")]),
                 dict(suggestions=[(-1, "x")]), dict(suggestions=[(1.5, "x")])):
         with pytest.raises(InputError):
-            pages.result_page(pair_result, **bad)
+            pages.result_page(pair_result, pages.page_options(pair_result, bad))
 
 
 def test_to_html_takes_the_declared_options_and_refuses_the_others_in_one_line(pair_result):
-    """``pages.PAGE_OPTIONS`` is what each result's page function takes besides what ``result_page`` sets
-    itself; a match's ``lines`` (set by its page) was a TypeError, it is refused like a misspelling."""
-    import inspect
+    """``pages.PAGE_OPTIONS`` names, for each result type, the ``PageOptions`` its page reads; any other
+    keyword of ``to_html`` (a match's ``lines``, set by its page, was a TypeError) is refused like a
+    misspelling, before anything is drawn."""
+    from dataclasses import fields
 
-    def keywords(*functions, given=()):
-        return {name for f in functions for name, p in inspect.signature(f).parameters.items()
-                if p.default is not p.empty} - set(given)
-
-    assert set(pages.PAGE_OPTIONS["ScoreResult"]) == keywords(pages.score_page)
-    assert set(pages.PAGE_OPTIONS["HeatMapResult"]) == keywords(pages.heatmap_page, given=("landmarks", "lines"))
-    assert set(pages.PAGE_OPTIONS["LandmarkResult"]) == keywords(pages.landmarks_page)
-    assert set(pages.PAGE_OPTIONS["LocalResult"]) == keywords(pages.local_page, given=("fixed", "result"))
-    assert set(pages.PAGE_OPTIONS["MatchResult"]) == keywords(
-        pages._match_result_page, pages.match_page, given=("landmarks_source", "landmarks_target", "fields", "lines"))
-    assert "a distinctive title" in pages.result_page(pair_result, title="a distinctive title", up="z")
+    assert set().union(*pages.PAGE_OPTIONS.values()) == {f.name for f in fields(pages.PageOptions)}
+    options = pages.page_options(pair_result, dict(title="a distinctive title", up="z"))
+    assert options == pages.PageOptions(title="a distinctive title", up="z")
+    assert "a distinctive title" in pages.result_page(pair_result, options)
     for bad in ("lines", "landmarks_source", "titel"):
         with pytest.raises(InputError, match=f"unknown option {bad!r} \\(its options: truth, suggestions"):
-            pages.result_page(pair_result, **{bad: ()})
+            pages.page_options(pair_result, {bad: ()})
+        with pytest.raises(InputError, match=f"unknown option {bad!r}"):
+            pair_result.to_html("never-written.html", **{bad: ()})
 
 
 def test_match_page_stands_shapes_upright(pair_result):
