@@ -81,7 +81,7 @@ def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
 
 
 def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
-          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", samples: str = "fps", **options) -> MatchResult:
+          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", **options) -> MatchResult:
     """Match ``source`` to ``target`` with corresponding landmarks fixed (input ids, same order).
 
     Parameters
@@ -94,9 +94,9 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     dense : how the map reaches every vertex: "zoomout" (landmark-anchored ZoomOut on the
         Laplace–Beltrami bases, ``matching.zoomout``), or the plain extensions of the sample
         map "distances" and "nearest" (``matching.dense``).
-    samples : "fps" (each shape its own samples) or "same-ids" (the target sampled at the
-        source's sample vertices: shapes with one vertex order; the summary gives the error).
-    **options : ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``,
+    **options : ``samples`` ("fps", the default: each shape its own samples; or "same-ids": the target
+        sampled at the source's sample vertices, for shapes with one vertex order; the summary gives the
+        error), ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``,
         ``error_bar`` (default True: also estimate the map's error without ground truth,
         ``matching.error_bar``: the mean displacement of δ(ε̂)'s witness on the source, ε̂ the
         map's own distortion), ``suggest`` (how many next landmarks to suggest, ``matching.suggest``; needs
@@ -117,7 +117,8 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     >>> r.map.shape[0] == sc.load(shape).n_vertices
     True
     """
-    opts, flags = _match_options(matcher, n_points, dense, samples, dict(options))
+    options = dict(options)
+    opts, flags = _match_options(matcher, n_points, dense, options.pop("samples", "fps"), options)
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     src, tgt = _inputs(source, target, ids_s, ids_t, flags)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}

@@ -33,8 +33,7 @@ DEFAULT_KAPPA_POINTS = 8
 
 
 def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: bool = False,
-          time_limit: float | None = None, effort: str = "default", epsilon: float | None = None,
-          **options) -> ScoreResult:
+          time_limit: float | None = None, effort: str = "default", **options) -> ScoreResult:
     """How hard ``x`` is to match: the σ bracket (paper Eq. 5), κ bracket, witness, δ(ε) and verdict.
 
     Parameters
@@ -50,8 +49,8 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
         ``to_dict()["time_limited"]`` and a note say so.  None: the searches run in full
         (deterministic) and each solve gets 10 s.
     effort : "quick", "default" or "thorough" work of the witness search.
-    epsilon : distortion level of the scale-aware score δ(ε) (default: the median sample spacing).
-    **options : the options of ``metric_shape`` (``seed``, ``force``, ``backend``, ...).
+    **options : ``epsilon``, the distortion level of the scale-aware score δ(ε) (default: the median
+        sample spacing), and the options of ``metric_shape`` (``seed``, ``force``, ``backend``, ...).
 
     Returns
     -------
@@ -68,9 +67,9 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     >>> result.verdict.startswith("exact symmetry")
     True
     """
-    opts, _ = ShapeOptions.take(options, "score")
-    settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=effort, epsilon=epsilon,
-                              seed=opts.seed, force=opts.force)
+    opts, extra = ShapeOptions.take(options, "score", others=("epsilon",))
+    settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=effort,
+                              epsilon=extra.get("epsilon"), seed=opts.seed, force=opts.force)
     shape = shape_of(x, n_points, landmarks, opts)
     report = score_report(shape, parse_ids(landmarks), settings)
     return promote(report, ScoreResult)
