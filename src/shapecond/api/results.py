@@ -49,10 +49,10 @@ def look_of(style: dict, colouring, defaults: dict):
     return style_of(Look, style, {**defaults, "colouring": replace(colouring, **paint)})
 
 
-def promote(result, cls, **extra):
-    """``result`` (a maths dataclass) as the interface's subclass ``cls``, with ``extra`` fields set."""
+def promote(result, cls, extra: dict | None = None):
+    """``result`` (a maths dataclass) as the interface's subclass ``cls``, with the fields ``extra`` set."""
     values = {f.name: getattr(result, f.name) for f in fields(result) if f.init}
-    return cls(**values, **extra)
+    return cls(**values, **(extra or {}))
 
 
 class Pictures:

@@ -96,7 +96,7 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(g.to_internal(parse_ids(landmarks)), zero_tol=zero_tol, ids=g.ids)
     result = replace(result, seconds=time.perf_counter() - t0)  # building and factorising the Hessian included
-    return promote(result, LocalResult, drawing=(g, problem, zero_tol))
+    return promote(result, LocalResult, {"drawing": (g, problem, zero_tol)})
 
 
 def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, user_landmarks=None,
@@ -215,7 +215,7 @@ def kappa(x, n_points: int | None = None, *, landmarks=(), trials: int = 20, sca
     finally:
         if bar is not None:
             bar.close()
-    return promote(res, KappaResult, shape=shape, landmark_ids=tuple(ids), trials=trials)
+    return promote(res, KappaResult, {"shape": shape, "landmark_ids": tuple(ids), "trials": trials})
 
 
 def _bar(total: int, desc: str):
