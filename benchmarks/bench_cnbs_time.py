@@ -78,7 +78,7 @@ from shapecond.symmetry.scale import budget_of, default_epsilon
 P = np.random.default_rng(0).normal(size=(40, 3))
 D = np.sqrt(((P[:, None] - P[None]) ** 2).sum(-1))
 for budget in (None, budget_of(default_epsilon(D, 40), 40, D)):
-    cnbs_landmarks(D, 40, 1, effort="quick", budget=budget)
+    cnbs_landmarks(D, 40, 1, budget=budget, options=importlib.import_module(_SEL + ".cnbs").CNBSOptions(effort="quick"))
 print("{}")
 """
 

@@ -55,7 +55,7 @@ from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
 from shapecond.api import metric_shape  # noqa: E402
 from shapecond.symmetry import objective as obj  # noqa: E402
 from shapecond.symmetry.resolution import resolution_for_shape  # noqa: E402
-from shapecond.symmetry.score import symmetry_score  # noqa: E402
+from shapecond.symmetry.score import ScoreOptions, symmetry_score  # noqa: E402
 
 STORE = Path(__file__).parent / "out" / "bench_dense.json"
 READING = """
@@ -186,14 +186,14 @@ SCORE = """
 import time
 from shapecond.shapes.io import load_geometry
 from shapecond.api import metric_shape
-from shapecond.symmetry.score import symmetry_score
+from shapecond.symmetry.score import ScoreOptions, symmetry_score
 from shapecond.symmetry.resolution import resolution_for_shape
 from shapecond.symmetry.search import witness_search
 import numpy as np
 witness_search(np.abs(np.subtract.outer(np.arange(9.0), np.arange(9.0))))  # numba cache load
 g = load_geometry({path!r})
 w = time.perf_counter(); sh = metric_shape(g, n_points={n}, target='dense', target_factor={f}); load = time.perf_counter() - w
-w, c = time.perf_counter(), time.process_time(); sc = symmetry_score(sh.D, {n}, exact=False)
+w, c = time.perf_counter(), time.process_time(); sc = symmetry_score(sh.D, {n}, options=ScoreOptions(exact=False))
 ws, cs = time.perf_counter() - w, time.process_time() - c
 w, c = time.perf_counter(), time.process_time(); r = resolution_for_shape(sh, score=sc)
 print(load, ws, cs, time.perf_counter() - w, time.process_time() - c, sc.sigma_lower, r.flag.replace(' ', '_'))
@@ -252,7 +252,7 @@ def dense_row(root, name, n, f=8):
     sh = metric_shape(g, n_points=n, target="dense", target_factor=f)
     build = time.perf_counter() - w
     w, c = time.perf_counter(), time.process_time()
-    sc = symmetry_score(sh.D, n, exact=False)
+    sc = symmetry_score(sh.D, n, options=ScoreOptions(exact=False))
     t_score, c_score = time.perf_counter() - w, time.process_time() - c
     res = resolution_for_shape(sh, score=sc)
     row = {"N": n, "M": sh.n_targets, "sigma_lower": jnum(sc.sigma_lower), "sigma_upper": jnum(sc.sigma_upper),
@@ -300,7 +300,7 @@ def stage_consistent(root, store, names, sizes, redo):
             pos = {int(v): i for i, v in enumerate(sh.samples)}
             perm = np.array([pos.get(int(g.symmetry[v]), -1) for v in sh.samples])
             closed = bool(np.all(perm >= 0))
-            sc = symmetry_score(sh.D, exact=False)
+            sc = symmetry_score(sh.D, options=ScoreOptions(exact=False))
             row = {"shape": name, "N": n, "closed": closed, "sigma_lower": jnum(sc.sigma_lower),
                    "upper_method": sc.upper_method, "swap": jnum(sc.swap_floor), "build_or_load_s": build,
                    "fixed_points": int(np.sum(perm == np.arange(n))) if closed else None}
@@ -375,7 +375,7 @@ def stage_floor(root, store, redo):
         s1, x, y = best_single_reassignment(sh.D, n)
         row = {"reassign": s1, "reassign_step_r": float(sh.D[x, y] / sh.covering_radius)}
         if name in NULL:
-            sc = symmetry_score(sh.D, n, exact=False)
+            sc = symmetry_score(sh.D, n, options=ScoreOptions(exact=False))
             gt = mirror_targets(root, name, g, sh)
             row["maps"] = [[jnum(obj.map_score(sh.D, t)), float(np.mean(t == gt)),
                             float(np.mean(sh.D[t, gt] <= 2 * sh.covering_radius)), int(np.sum(t != np.arange(n)))]

@@ -294,14 +294,11 @@ def main() -> None:
         if timing.exists():
             wall, peak = json.loads(timing.read_text()).values()
     else:
-        from shapecond.evaluation import evaluate_dataset
+        from shapecond.evaluation import EvaluationOptions, evaluate_dataset
         from shapecond.evaluation.report import write_report
 
         t0 = time.perf_counter()
-        ev = evaluate_dataset(a.dataset, classes=a.classes.split(",") if a.classes else None,
-                              methods=a.methods.split(","), n_jobs=a.jobs, quick=a.quick,
-                              progress=sys.stderr.isatty(), protocol=a.protocol, matchers=a.matchers.split(","),
-                              max_targets=a.max_targets)
+        ev = evaluate_dataset(a.dataset, options=EvaluationOptions(classes=a.classes.split(",") if a.classes else None, methods=a.methods.split(","), n_jobs=a.jobs, quick=a.quick, progress=sys.stderr.isatty(), protocol=a.protocol, matchers=a.matchers.split(","), max_targets=a.max_targets))
         wall = time.perf_counter() - t0
         peak = peak_rss_mb()
         out = Path(a.out)

@@ -154,12 +154,12 @@ import json, os, time
 t0 = time.perf_counter()
 from shapecond.api import metric_shape
 from shapecond.symmetry.resolution import resolution_for_shape
-from shapecond.symmetry.score import symmetry_score
+from shapecond.symmetry.score import ScoreOptions, symmetry_score
 import shapecond.symmetry.search  # noqa: F401  (loads the compiled kernels)
 t1 = time.perf_counter()
 shape = metric_shape({path!r})
 t2 = time.perf_counter()
-sc = symmetry_score(shape.D, shape.n_points, seed=0)
+sc = symmetry_score(shape.D, shape.n_points, options=ScoreOptions(seed=0))
 t3 = time.perf_counter()
 res = resolution_for_shape(shape, seed=0, score=sc)
 t4 = time.perf_counter()
@@ -201,11 +201,11 @@ from bench_dense import mirror_targets
 from shapecond.shapes.io import load_geometry
 from shapecond.api import metric_shape
 from shapecond.symmetry.resolution import resolution_for_shape
-from shapecond.symmetry.score import symmetry_score
+from shapecond.symmetry.score import ScoreOptions, symmetry_score
 from pathlib import Path
 g = load_geometry({path!r})
 sh = metric_shape(g, n_points=400, target="dense", cache=False)
-sc = symmetry_score(sh.D, 400, exact=False)
+sc = symmetry_score(sh.D, 400, options=ScoreOptions(exact=False))
 res = resolution_for_shape(sh, score=sc)
 gt = mirror_targets(Path({root!r}), {name!r}, g, sh)
 print("__OUT__" + json.dumps(dict(sigma=sc.sigma_lower, flag=res.flag,

@@ -33,7 +33,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import machine, peak_rss_mb, write_section  # noqa: E402
 
-from shapecond.selection.cnbs import cnbs_landmarks, full_heat_map, heat_map  # noqa: E402
+from shapecond.selection.cnbs import CNBSOptions, cnbs_landmarks, full_heat_map, heat_map  # noqa: E402
 from shapecond.selection.fps import fps_landmarks  # noqa: E402
 from shapecond.selection.pls import pls_landmarks  # noqa: E402
 from shapecond.shapes.io import load_geometry, read_symmetry_map  # noqa: E402
@@ -87,7 +87,7 @@ def part_animal():
     x = np.abs(g.vertices[shape.samples[:n], 0])
     plane = x < 1e-9
     t0 = time.perf_counter()
-    out = cnbs_landmarks(shape.D, n, 3, keep_heat_maps=True)
+    out = cnbs_landmarks(shape.D, n, 3, options=CNBSOptions(keep_heat_maps=True))
     t_cnbs = time.perf_counter() - t0
     steps, L = [], []
     for c, hm in zip(out["landmarks"], out["heat_maps"]):
@@ -130,7 +130,7 @@ def part_tosca(data, classes):
         n = shape.n_samples
         t_shape = time.perf_counter() - t0
         t1 = time.perf_counter()
-        cn = cnbs_landmarks(shape.D, n, 3, keep_heat_maps=True)
+        cn = cnbs_landmarks(shape.D, n, 3, options=CNBSOptions(keep_heat_maps=True))
         t_cnbs = time.perf_counter() - t1
         chosen = {"fps": fps_landmarks(shape.D, n, 3, seed=0), "pls": pls_landmarks(shape.D, n, 3)[0],
                   "cnbs": cn["landmarks"]}
@@ -182,17 +182,19 @@ def part_pictures(data):
 
 def pictures(cls, g, shape, chosen, values, sigma_before):
     from shapecond.viz.heatmap import render_heatmap_png
-    from shapecond.viz.render import render_rows
+    from shapecond.viz.render import Look, render_rows
+    from shapecond.viz.scene import HeatMapStyle
 
     OUT.mkdir(exist_ok=True)
     vals = np.asarray(values, dtype=float).copy()
     finite = vals[np.isfinite(vals)]
     vals = np.where(np.isnan(vals), finite.max(), vals)
-    render_heatmap_png(shape, vals, OUT / f"{cls}0_heatmap.png", title=f"{cls}0: σ with each point fixed "
-                       f"(N = {shape.n_samples}, before: {fmt(sigma_before)})", ply=str(OUT / f"{cls}0_heatmap.ply"))
+    title = f"{cls}0: σ with each point fixed (N = {shape.n_samples}, before: {fmt(sigma_before)})"
+    render_heatmap_png(shape, vals, OUT / f"{cls}0_heatmap.png", ply=str(OUT / f"{cls}0_heatmap.ply"),
+                       style=HeatMapStyle(title=title))
     rows = [dict(values=None, landmarks=[int(shape.samples[i]) for i in chosen[m]], label=m.upper())
             for m in ("fps", "pls", "cnbs")]
-    render_rows(OUT / f"{cls}0_landmarks.png", g.vertices, g.faces, rows, title=f"{cls}0: 3 landmarks")
+    render_rows(OUT / f"{cls}0_landmarks.png", g.vertices, g.faces, rows, look=Look(title=f"{cls}0: 3 landmarks"))
 
 
 def part_timing(data, k=15):

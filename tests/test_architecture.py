@@ -15,7 +15,7 @@ ROOT = Path(shapecond.__file__).parent
 #: Each top-level part of the package, lowest first: a module may import its own part and parts listed
 #: before it.  The maths parts share a rank with one order among them; ``viz`` sits beside the maths.
 LAYERS = [
-    ("_version", "errors", "_options"), ("jsonable", "checks"), ("threads",), ("limits",), ("output",), ("cache",),
+    ("_version", "errors"), ("jsonable", "checks"), ("threads",), ("limits",), ("output",), ("cache",),
     ("_jit_cache", "cholesky"), ("shapes",), ("symmetry",), ("deformation",), ("selection",), ("matching",),
     ("viz",), ("parallel",), ("api",), ("evaluation", "batch"), ("cli",), ("__main__", ""),
 ]

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from shapecond import cache
-from shapecond.shapes.metric import build_metric_shape
+from shapecond.shapes.metric import Sampling, build_metric_shape
 from shapecond.shapes.synthetic import generate
 from tests.helpers import deadline, run_cli
 
@@ -22,7 +22,8 @@ def folder(tmp_path, monkeypatch):
 
 
 def _shape(**kw):
-    return build_metric_shape(generate("blob", subdivisions=2), n_points=12, target="dense", target_factor=2, **kw)
+    return build_metric_shape(generate("blob", {"subdivisions": 2}), n_points=12,
+                              sampling=Sampling(target="dense", target_factor=2, **kw))
 
 
 def _only_entry(folder):
@@ -33,8 +34,7 @@ def _only_entry(folder):
 def test_an_entry_written_for_another_key_is_recomputed_not_used(folder):
     fresh = _shape()
     entry = _only_entry(folder)
-    other = build_metric_shape(generate("blob", subdivisions=2, seed=3), n_points=12, target="dense", target_factor=2,
-                         cache=False)
+    other = build_metric_shape(generate("blob", {"subdivisions": 2, "seed": 3}), n_points=12, sampling=Sampling(target="dense", target_factor=2, cache=False))
     with np.load(entry) as z:  # craft: another shape's content under this key, still a valid archive
         data = {k: z[k] for k in z.files}
     forged = dict(data, D=other.D, samples=other.samples)
@@ -139,8 +139,7 @@ def test_an_entry_rewritten_with_a_recomputed_plain_checksum_is_recomputed_not_u
     (what the checksum was) changed σ and shifted every sample id, exit 0."""
     fresh = _shape()
     entry = _only_entry(folder)
-    other = build_metric_shape(generate("blob", subdivisions=2, seed=3), n_points=12, target="dense", target_factor=2,
-                         cache=False)
+    other = build_metric_shape(generate("blob", {"subdivisions": 2, "seed": 3}), n_points=12, sampling=Sampling(target="dense", target_factor=2, cache=False))
     with np.load(entry) as z:
         content = {k: z[k] for k in z.files if not k.startswith("__")}
     content.update(D=other.D, samples=other.samples)

@@ -54,9 +54,9 @@ def jsonable(obj):
     return obj
 
 
-def dumps(obj, **kw) -> str:
-    """``json.dumps`` of :func:`jsonable` (``obj``), refusing NaN."""
-    return json.dumps(jsonable(obj), allow_nan=False, **kw)
+def dumps(obj, indent: int | None = None) -> str:
+    """``json.dumps`` of :func:`jsonable` (``obj``) with ``indent``, refusing NaN."""
+    return json.dumps(jsonable(obj), allow_nan=False, indent=indent)
 
 
 def fmt(value, digits: int = 4) -> str:

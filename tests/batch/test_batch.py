@@ -15,7 +15,7 @@ import pytest
 from shapecond.batch import schema
 from shapecond.batch.inputs import content_hash, expand_inputs
 from shapecond.batch.rows import params_key, parse_what, shape_row
-from shapecond.batch.run import run_batch
+from shapecond.batch.run import BatchRun, run_batch
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
 
@@ -197,12 +197,12 @@ def test_resume_skips_done_shapes_and_rescores_changed_ones(shape_dir, tmp_path)
     out = tmp_path / "t.parquet"
     first = run_batch([work], out, {"points": 16})
     assert (first.scored, first.failed) == (2, 0)
-    again = run_batch([work], out, {"points": 16}, resume=True)
+    again = run_batch([work], out, {"points": 16}, how=BatchRun(resume=True))
     assert (again.scored, again.resumed, again.where) == (0, 2, "nothing to do")
     (work / "blob1.off").write_bytes((shape_dir / "blob2.off").read_bytes())  # new content, same name
-    third = run_batch([work], out, {"points": 16}, resume=True)
+    third = run_batch([work], out, {"points": 16}, how=BatchRun(resume=True))
     assert (third.scored, third.resumed) == (1, 1)
-    other = run_batch([work], out, {"points": 18}, resume=True)  # other parameters: other rows
+    other = run_batch([work], out, {"points": 18}, how=BatchRun(resume=True))  # other parameters: other rows
     assert other.scored == 2
     assert len(read_table(out)) == 5
 

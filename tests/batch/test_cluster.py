@@ -13,7 +13,7 @@ import pytest
 
 from shapecond import parallel
 from shapecond.batch import schema
-from shapecond.batch.run import run_batch
+from shapecond.batch.run import BatchRun, run_batch
 from shapecond.errors import InputError
 from shapecond.shapes.io import write_mesh
 from tests.helpers import VOLATILE, descendants, read_table, run_cli, stable, write_strip_class
@@ -158,7 +158,7 @@ def test_a_batch_killed_mid_run_resumes_to_the_same_table(tmp_path):
     assert len(before) < 6 and (tmp_path / ".t.parquet.lock").exists()
     os.environ["SHAPECOND_CACHE"], saved = str(tmp_path / "cache"), os.environ["SHAPECOND_CACHE"]
     try:
-        resumed = run_batch([folder], out, {"points": 60}, resume=True)  # the killed batch's lock is gone
+        resumed = run_batch([folder], out, {"points": 60}, how=BatchRun(resume=True))  # the killed batch's lock is gone
         fresh = run_batch([folder], tmp_path / "fresh.parquet", {"points": 60})
     finally:
         os.environ["SHAPECOND_CACHE"] = saved

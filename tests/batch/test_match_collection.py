@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import shapecond as sc
 from shapecond.batch import run_batch
+from shapecond.batch.run import BatchRun
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
 from shapecond.shapes.landmark_files import landmarks_of, pair_by_label, read_landmark_csv, read_lmk
@@ -115,7 +116,7 @@ def test_batch_matches_a_collection_and_resumes(collection, tmp_path):
     report = (tmp_path / "report.html").read_text()
     assert "data:image/png;base64," in report and "Annotate more" in report and "bare" in report
     stamp = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "maps").iterdir()}
-    again = run_batch(shapes, out, OPTIONS, what=[f"match:{root / 'template.off'}"], resume=True)
+    again = run_batch(shapes, out, OPTIONS, what=[f"match:{root / 'template.off'}"], how=BatchRun(resume=True))
     assert (again.scored, again.resumed) == (0, 4)
     assert {p.name: p.stat().st_mtime_ns for p in (tmp_path / "maps").iterdir()} == stamp
     assert len(out.read_text().splitlines()) == 4  # no row twice
@@ -134,7 +135,7 @@ def test_changed_landmarks_recompute_only_that_shape(collection, tmp_path):
     first = run_batch([folder / "s2.off", folder / "two.off"], out, OPTIONS, what=what)
     assert (first.scored, first.failed) == (2, 1)
     (folder / "two.lmk").write_text("c 3\nd 30\n" + (folder / "two.lmk").read_text())
-    second = run_batch([folder / "s2.off", folder / "two.off"], out, OPTIONS, what=what, resume=True)
+    second = run_batch([folder / "s2.off", folder / "two.off"], out, OPTIONS, what=what, how=BatchRun(resume=True))
     assert (second.scored, second.resumed, second.failed) == (1, 1, 0)
 
 

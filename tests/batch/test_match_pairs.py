@@ -8,6 +8,7 @@ import pytest
 import shapecond as sc
 from shapecond.api.collection import cycle_error
 from shapecond.batch import run_batch
+from shapecond.batch.run import BatchRun
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
 from shapecond.shapes.io import write_mesh
@@ -59,7 +60,7 @@ def test_listed_pairs_matched_both_ways_with_their_cycle_error(strips, tmp_path,
     assert json.loads(got[("s1.off", "s2.off")]["params"])["reference"] == str(root / "s1.off")
     report = (tmp_path / "report.html").read_text()
     assert "<th>cycle</th>" in report and "s1 → s2" in report and "listed pairs" in report
-    again = run_batch(shapes, out, {**OPTIONS, "pairs": pairs, "both_directions": True}, what=["match"], resume=True)
+    again = run_batch(shapes, out, {**OPTIONS, "pairs": pairs, "both_directions": True}, what=["match"], how=BatchRun(resume=True))
     assert (again.scored, again.resumed) == (0, 4) and len(out.read_text().splitlines()) == 4
 
 
@@ -102,8 +103,7 @@ def test_killed_between_the_two_rows_of_a_shape_adds_only_the_missing_one(strips
     lines = both_ways[0].read_text().splitlines(keepends=True)
     out = tmp_path / "t.csv"
     out.write_text("".join(lines[:-1]))  # the forward row only
-    again = run_batch([root / "s1.off"], out, {**OPTIONS, "both_directions": True},
-                      what=[f"match:{root / 'template.off'}"], resume=True)
+    again = run_batch([root / "s1.off"], out, {**OPTIONS, "both_directions": True}, what=[f"match:{root / 'template.off'}"], how=BatchRun(resume=True))
     assert (again.scored, again.resumed, again.failed) == (1, 1, 0)
     rows = _rows(out)
     assert out.read_text().splitlines(keepends=True)[:2] == lines[:2] and len(rows) == 2

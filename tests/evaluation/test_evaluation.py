@@ -8,7 +8,7 @@ import pytest
 
 from shapecond.cli import main
 from shapecond.errors import InputError
-from shapecond.evaluation import Evaluation, MatchRecord, evaluate_dataset
+from shapecond.evaluation import Evaluation, EvaluationOptions, MatchRecord, evaluate_dataset
 from shapecond.evaluation.datasets import off_vertex_count, read_class
 from shapecond.evaluation.landmark_sets import ShapeSetup, landmark_task
 from shapecond.evaluation.report import correlation, markdown, write_report
@@ -31,8 +31,7 @@ def test_null_shape_is_the_lowest_number(dataset):
 
 @pytest.mark.slow
 def test_evaluation_of_an_isometric_class(dataset, tmp_path):
-    ev = evaluate_dataset(dataset, methods=("fps",), matchers=("lh05", "faq"), n_points=60,
-                          protocol="both")
+    ev = evaluate_dataset(dataset, options=EvaluationOptions(methods=("fps",), matchers=("lh05", "faq"), n_points=60, protocol="both"))
     # 2 targets x counts {3, 10} x 2 matchers x 2 protocols
     assert len(ev.records) == 16
     assert {r.n_landmarks for r in ev.records} == {3, 10}
@@ -78,7 +77,7 @@ def test_class_with_different_vertex_counts_is_refused(dataset, tmp_path):
     g = plane_patch(n=9)
     write_off(tmp_path / "odd" / "odd2.off", g.vertices, g.faces)
     with pytest.raises(InputError, match="different vertex counts"):
-        evaluate_dataset(tmp_path, methods=("fps",), n_points=20)
+        evaluate_dataset(tmp_path, options=EvaluationOptions(methods=("fps",), n_points=20))
 
 
 def test_class_with_a_different_vertex_order_is_refused(dataset, tmp_path, capsys):
@@ -99,9 +98,9 @@ def test_class_with_a_different_vertex_order_is_refused(dataset, tmp_path, capsy
 
 def test_unknown_class_and_method_are_input_errors(dataset):
     with pytest.raises(InputError, match="not found"):
-        evaluate_dataset(dataset, classes=["horse"], methods=("fps",))
+        evaluate_dataset(dataset, options=EvaluationOptions(classes=["horse"], methods=("fps",)))
     with pytest.raises(InputError):
-        evaluate_dataset(dataset, methods=("no-such-method",), n_points=20)
+        evaluate_dataset(dataset, options=EvaluationOptions(methods=("no-such-method",), n_points=20))
 
 
 def _fake(scores_errors):
@@ -202,8 +201,7 @@ def test_dask_backend_on_a_local_cluster(dataset):
 
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False) as cluster, \
             Client(cluster) as client:
-        ev = evaluate_dataset(dataset, methods=("fps",), matchers=("faq",), n_points=40,
-                              scheduler=client)
+        ev = evaluate_dataset(dataset, options=EvaluationOptions(methods=("fps",), matchers=("faq",), n_points=40, scheduler=client))
     assert len(ev.records) == 4
 
 
@@ -246,8 +244,7 @@ def test_cnbs_scale_at_the_class_level_read_off_its_matched_maps(dataset, monkey
         seen.update(real(*args))
         return seen
     monkeypatch.setattr("shapecond.evaluation.run.matched_level_task", spy)
-    ev = evaluate_dataset(dataset, methods=("cnbs-scale-hat",), matchers=("faq",), n_points=40, counts=(3,),
-                          error_bars=False, cache=False)
+    ev = evaluate_dataset(dataset, options=EvaluationOptions(methods=("cnbs-scale-hat",), matchers=("faq",), n_points=40, counts=(3,), error_bars=False, cache=False))
     lm = ev.landmarks[0]
     assert lm["method"] == "cnbs-scale-hat" and seen["cls"] == "strip" and seen["epsilon"] > 0
     null = dataset / "strip" / "strip0.off"
@@ -255,4 +252,4 @@ def test_cnbs_scale_at_the_class_level_read_off_its_matched_maps(dataset, monkey
     assert list(ref.landmarks) == lm["ids"]
     assert {r.method for r in ev.records} == {"cnbs-scale-hat"}
     with pytest.raises(InputError, match="cnbs-scale-hat"):
-        evaluate_dataset(dataset, methods=("cnbs-scale-ht",))
+        evaluate_dataset(dataset, options=EvaluationOptions(methods=("cnbs-scale-ht",)))

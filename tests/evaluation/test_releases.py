@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from shapecond.errors import InputError
-from shapecond.evaluation import evaluate_dataset
+from shapecond.evaluation import EvaluationOptions, evaluate_dataset
 from shapecond.evaluation.datasets import check_layout, find_classes, pair_groups
 from shapecond.shapes.pairs_list import read_pairs
 from shapecond.evaluation.report import markdown, pooled, write_report
@@ -71,9 +71,7 @@ def test_a_pairs_list_groups_the_pairs_by_source_across_classes(tmp_path):
 @pytest.mark.slow
 def test_the_listed_pairs_are_evaluated_with_flips_and_the_pooled_table(tmp_path):
     _flat(tmp_path / "vtx_5k")
-    ev = evaluate_dataset(tmp_path, methods=("fps",), matchers=("zoomout",), n_points=60,
-                          pairs=(("strip0", "plate2"), ("plate1", "strip9")), n_landmarks=4, counts=(3,),
-                          error_bars=False, scores=False)
+    ev = evaluate_dataset(tmp_path, options=EvaluationOptions(methods=("fps",), matchers=("zoomout",), n_points=60, pairs=(("strip0", "plate2"), ("plate1", "strip9")), n_landmarks=4, counts=(3,), error_bars=False, scores=False))
     assert all(d["scores"] == {} and d["scale"] == {} for d in ev.landmarks)   # the matchings alone
     assert sorted((r.cls, r.target, r.n_landmarks) for r in ev.records) == [
         ("plate1", "strip9", 3), ("plate1", "strip9", 4), ("strip0", "plate2", 3), ("strip0", "plate2", 4)]
@@ -111,7 +109,7 @@ def test_bad_releases_and_pairs_are_refused_in_one_line(tmp_path):
     with pytest.raises(InputError, match="no shapes"):
         find_classes(empty)
     with pytest.raises(InputError, match="either classes or a pairs list"):
-        evaluate_dataset(tmp_path, classes=("strip",), pairs=(("strip0", "strip4"),))
+        evaluate_dataset(tmp_path, options=EvaluationOptions(classes=("strip",), pairs=(("strip0", "strip4"),)))
 
 
 def test_two_shapes_of_one_name_and_unreadable_entries_are_refused_not_dropped(tmp_path):

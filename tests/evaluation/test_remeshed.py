@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from shapecond.evaluation import evaluate_dataset
+from shapecond.evaluation import EvaluationOptions, evaluate_dataset
 from shapecond.evaluation.datasets import find_classes
 from shapecond.evaluation.protocols import landmark_images
 from shapecond.evaluation.report import markdown
@@ -59,7 +59,7 @@ def test_a_corres_folder_makes_a_remeshed_class(remeshed):
 
 @pytest.mark.slow
 def test_dense_maps_between_differently_meshed_strips_err_below_a_vertex_spacing(remeshed):
-    ev = evaluate_dataset(remeshed, methods=("fps",), matchers=("lh05", "zoomout"), n_points=60)
+    ev = evaluate_dataset(remeshed, options=EvaluationOptions(methods=("fps",), matchers=("lh05", "zoomout"), n_points=60))
     assert ev.settings["protocols"] == ["remeshed"]
     # 2 targets x counts {3, 10} x 2 matchers
     assert len(ev.records) == 8 and {r.protocol for r in ev.records} == {"remeshed"}

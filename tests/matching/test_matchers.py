@@ -8,8 +8,8 @@ from scipy.spatial.distance import cdist
 from shapecond.errors import InputError
 from shapecond.matching.candidates import (check_landmarks, descriptor_cost, k_best_candidates,
                                            recall)
-from shapecond.matching.seeded import faq_match
-from shapecond.matching.spectral import (affinity_matrix, assignment_rounding, complete_map,
+from shapecond.matching.seeded import FAQOptions, faq_match
+from shapecond.matching.spectral import (LH05Options, affinity_matrix, assignment_rounding, complete_map,
                                          greedy_discretisation, lh05_match, principal_eigenvector)
 
 
@@ -123,7 +123,7 @@ def test_lh05_recovers_an_isometric_permutation(rounding):
     _, Ds = _planar(120, 7)
     Dt, truth = _permuted(Ds, 8)
     ls = [0, 1, 2]
-    m = lh05_match(Ds, Dt, ls, truth[ls], k=10, rounding=rounding)
+    m = lh05_match(Ds, Dt, ls, truth[ls], options=LH05Options(k=10, rounding=rounding))
     assert np.mean(m.t == truth) >= 0.98
     assert list(m.t[ls]) == list(truth[ls])
 
@@ -133,7 +133,7 @@ def test_faq_recovers_an_isometric_permutation(objective):
     _, Ds = _planar(120, 9)
     Dt, truth = _permuted(Ds, 10)
     ls = [0, 1, 2]
-    m = faq_match(Ds, Dt, ls, truth[ls], objective=objective)
+    m = faq_match(Ds, Dt, ls, truth[ls], options=FAQOptions(objective=objective))
     assert np.mean(m.t == truth) >= 0.98
     assert list(m.t[ls]) == list(truth[ls])
 
@@ -158,7 +158,7 @@ def test_matchers_on_two_different_samplings():
     b[lt] = a[ls]
     Ds, Dt = cdist(a, a), cdist(b, b)
     spacing = np.median(np.sort(Ds, 1)[:, 1])
-    for m in (lh05_match(Ds, Dt, ls, lt, k=20), faq_match(Ds, Dt, ls, lt)):
+    for m in (lh05_match(Ds, Dt, ls, lt, options=LH05Options(k=20)), faq_match(Ds, Dt, ls, lt)):
         err = np.linalg.norm(a - b[m.t], axis=1)
         assert err.mean() < 2.5 * spacing, m.matcher
         assert np.median(err) < 1.5 * spacing, m.matcher
@@ -177,18 +177,18 @@ def test_sparse_affinity_of_a_local_kernel_equals_the_dense_reference():
     assert np.allclose(M.toarray(), ref, rtol=1e-6, atol=0)
 
 
-def test_matcher_keywords_and_the_options_object_are_the_same_call():
-    from shapecond.matching.seeded import FAQOptions
-    from shapecond.matching.spectral import LH05Options
+def test_the_matchers_take_one_options_object_and_match_samples_dispatches_on_its_type():
+    from shapecond.matching.pipeline import match_samples
 
     _, D = _planar(30, 1)
     Dt, _ = _permuted(D, 2)
     lm = [0, 1, 2, 3]
-    a = lh05_match(D, Dt, lm, lm, k=6, rounds=1)
-    b = lh05_match(D, Dt, lm, lm, LH05Options(k=6, rounds=1))
-    assert np.array_equal(a.t, b.t)
-    c = faq_match(D, Dt, lm, lm, objective="gaussian", maxiter=5)
-    d = faq_match(D, Dt, lm, lm, options=FAQOptions(objective="gaussian", maxiter=5))
-    assert np.array_equal(c.t, d.t)
+    a = lh05_match(D, Dt, lm, lm, options=LH05Options(k=6, rounds=1))
+    assert np.array_equal(match_samples(D, Dt, lm, lm, LH05Options(k=6, rounds=1)).t, a.t) and a.matcher == "lh05"
+    c = faq_match(D, Dt, lm, lm, options=FAQOptions(objective="gaussian", maxiter=5))
+    d = match_samples(D, Dt, lm, lm, FAQOptions(objective="gaussian", maxiter=5))
+    assert np.array_equal(c.t, d.t) and d.matcher == "faq"
+    with pytest.raises(TypeError):  # one call form: a field is not a keyword of the function
+        lh05_match(D, Dt, lm, lm, k=6)
     with pytest.raises(InputError):
-        lh05_match(D, Dt, lm, lm, rounding="nearest")
+        lh05_match(D, Dt, lm, lm, options=LH05Options(rounding="nearest"))

@@ -8,8 +8,8 @@ from scipy.spatial.distance import cdist
 from shapecond.matching import consistency as C
 from shapecond.matching import refine as R
 from shapecond.matching.nested import CORE_LANDMARKS, core_size, with_landmarks
-from shapecond.matching.seeded import faq_match
-from shapecond.matching.spectral import default_sigma, fine_kernel, lh05_match
+from shapecond.matching.seeded import FAQOptions, faq_match
+from shapecond.matching.spectral import LH05Options, default_sigma, fine_kernel, lh05_match
 
 
 def _deformed(n, seed, amp=0.25, noise=0.04):
@@ -34,6 +34,7 @@ def _objective(matcher, Ds, Dt):
 
 
 _MATCH = {"lh05": lh05_match, "faq": faq_match}
+_OPTIONS = {"lh05": LH05Options, "faq": FAQOptions}
 
 
 @settings(max_examples=60, deadline=None)
@@ -76,7 +77,7 @@ def test_more_landmarks_never_end_below_the_first_three(matcher, seeds):
         assert list(full.t[ls]) == list(lt)
         value = full.info["objective"] if matcher == "lh05" else full.info["value"]
         assert value == pytest.approx(F(full.t), rel=1e-12)
-        plain = match(Ds, Dt, ls, lt, nested=False)
+        plain = match(Ds, Dt, ls, lt, _OPTIONS[matcher](nested=False))
         broken_without += F(plain.t) < F(start) - 1e-9 * abs(F(start))
         if np.array_equal(start, core.t):  # the first three's map satisfies every landmark
             assert F(full.t) >= F(core.t) - 1e-9 * abs(F(core.t))

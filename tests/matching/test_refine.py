@@ -10,7 +10,7 @@ from scipy.spatial.distance import cdist
 from shapecond.matching import consistency as C
 from shapecond.matching import refine as R
 from shapecond.matching.seeded import faq_match
-from shapecond.matching.spectral import default_sigma, fine_kernel, lh05_match
+from shapecond.matching.spectral import LH05Options, default_sigma, fine_kernel, lh05_match
 
 
 def _instance(n, seed, noise=0.0):
@@ -143,7 +143,7 @@ def test_robust_reassignment_keeps_a_permutation_and_recovers_a_shifted_region()
 def test_lh05_reports_its_objective_and_beats_the_truth_on_an_isometry(seed):
     Ds, Dt, truth = _instance(80, seed)
     ls = [0, 1, 2]
-    m = lh05_match(Ds, Dt, ls, truth[ls], k=10)
+    m = lh05_match(Ds, Dt, ls, truth[ls], options=LH05Options(k=10))
     kern = fine_kernel(default_sigma(Ds))
     assert m.info["objective"] == pytest.approx(C.objective(Ds, Dt, m.t, kern), rel=1e-9)
     assert m.info["objective"] >= C.objective(Ds, Dt, truth, kern) - 1e-9

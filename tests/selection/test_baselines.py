@@ -5,12 +5,13 @@ import pytest
 import scipy.sparse as sp
 
 from shapecond.errors import InputError
-from shapecond.selection import select_landmarks
+from shapecond.selection import LandmarkOptions, select_landmarks
 from shapecond.selection.fps import fps_landmarks
 from shapecond.selection.hks import _local_maxima, heat_kernel_signature, hks_landmarks
 from shapecond.selection.pls import _entropy, distance_histograms, pls_landmarks
-from shapecond.shapes.metric import build_metric_shape, from_distance_matrix
+from shapecond.shapes.metric import Sampling, build_metric_shape, from_distance_matrix
 from shapecond.shapes.synthetic import animal
+from shapecond.selection.user import UserLandmarks
 
 
 def _dist(P):
@@ -21,7 +22,7 @@ def _dist(P):
 @pytest.fixture(scope="module")
 def animal_shape():
     """The generated animal, coarse (about 1.8k vertices), 60 samples."""
-    return build_metric_shape(animal(delta=0.05, resolution=0.06), n_points=60, cache=False)
+    return build_metric_shape(animal(delta=0.05, resolution=0.06), n_points=60, sampling=Sampling(cache=False))
 
 
 def _star(seed=0):
@@ -148,21 +149,21 @@ def test_user_landmarks_from_file(tmp_path, animal_shape):
     ids = shape.sample_ids[[5, 2, 9]]
     f = tmp_path / "lm.pid"
     f.write_text("".join(f"  {v} 0 0 0\n" for v in ids))
-    r = select_landmarks(shape, 0, "user", path=str(f))
+    r = select_landmarks(shape, 0, "user", LandmarkOptions(own=UserLandmarks(path=str(f))))
     assert list(r.landmarks) == [int(v) for v in ids]
     assert list(r.sample_indices) == [5, 2, 9]
     # a vertex that is not a sample goes to its nearest sample
     v = int(np.setdiff1d(np.arange(shape.geometry.n_vertices), shape.samples)[0])
-    r2 = select_landmarks(shape, 0, "user", ids=[int(shape.geometry.ids[v])])
+    r2 = select_landmarks(shape, 0, "user", LandmarkOptions(own=UserLandmarks(ids=[int(shape.geometry.ids[v])])))
     assert r2.sample_indices[0] < shape.n_samples
     with pytest.raises(InputError):
-        select_landmarks(shape, 0, "user", ids=[int(ids[0]), int(ids[0])])
+        select_landmarks(shape, 0, "user", LandmarkOptions(own=UserLandmarks(ids=[int(ids[0]), int(ids[0])])))
     with pytest.raises(InputError):
-        select_landmarks(shape, 0, "user", ids=[10**9])
+        select_landmarks(shape, 0, "user", LandmarkOptions(own=UserLandmarks(ids=[10**9])))
 
 
 def test_select_landmarks_result(animal_shape):
-    r = select_landmarks(animal_shape, 3, "fps", scores=True)
+    r = select_landmarks(animal_shape, 3, "fps", options=LandmarkOptions(scores=True))
     d = r.to_dict()
     assert set(d) >= {"landmarks", "scores", "method", "seconds"}
     assert len(d["landmarks"]) == 3 and all(s is not None for s in d["scores"])
@@ -178,7 +179,7 @@ def test_cnbs_local_on_a_small_mesh():
     from shapecond.shapes.synthetic import bumpy_blob
 
     g = bumpy_blob(subdivisions=2)
-    shape = build_metric_shape(g, n_points=30, target="samples", cache=False)
+    shape = build_metric_shape(g, n_points=30, sampling=Sampling(target="samples", cache=False))
     r = select_landmarks(shape, 3, "cnbs-local")
     assert r.method == "cnbs-local" and len(set(r.vertices)) == 3
     assert all(b <= a * (1 + 1e-9) for a, b in zip(r.scores, r.scores[1:]))
@@ -188,21 +189,26 @@ def test_cnbs_local_on_a_small_mesh():
         select_landmarks(from_distance_matrix(D), 2, "cnbs-local")
 
 
-def test_the_declared_options_of_each_method_are_its_function_s_keywords():
-    """``OWN_OPTIONS`` (what ``select_landmarks`` lets through to a method) is exactly what the method's
-    function takes: a name missing is refused, a name too many is a TypeError after the geodesics."""
-    import inspect
+def test_the_interface_builds_each_method_s_own_options_from_its_keywords():
+    """``api.options.landmark_options``: the flat keywords of ``sc.landmarks`` become one
+    ``LandmarkOptions`` with the method's own options object; a name the method does not take, a bad
+    epsilon or score is refused before any work."""
+    from shapecond.api.options import landmark_options
+    from shapecond.selection import LocalLandmarkOptions, check_method_options
+    from shapecond.selection.hks import HKSOptions
 
-    from shapecond.selection import OWN_OPTIONS, _local_landmarks, check_method_options
-    from shapecond.selection.user import user_landmarks
-
-    def keywords(f, *taken):
-        return set(inspect.signature(f).parameters) - set(taken)
-
-    assert set(OWN_OPTIONS["cnbs-local"]) == keywords(_local_landmarks, "shape", "k", "fixed")
-    assert set(OWN_OPTIONS["hks"]) == keywords(hks_landmarks, "shape", "k", "seed")
-    assert set(OWN_OPTIONS["user"]) == keywords(user_landmarks, "shape")
-    check_method_options("hks", {"time_fraction": 0.2, "n_eigs": 12, "effort": "quick"})
+    opts, runtime = landmark_options("hks", 3, {"time_fraction": 0.2, "n_eigs": 12, "effort": "quick"})
+    assert opts.own == HKSOptions(time_fraction=0.2, n_eigs=12) and (opts.seed, opts.effort) == (3, "quick")
+    assert runtime == {}
+    assert landmark_options("cnbs-local", 0, {"alpha": 2.0})[0].own == LocalLandmarkOptions(alpha=2.0)
+    assert landmark_options("user", 0, {"ids": [4, 5]})[0].own == UserLandmarks(ids=[4, 5])
+    assert landmark_options("fps", 0, {"fixed": [2]})[0] == LandmarkOptions(fixed=(2,))
+    cnbs, runtime = landmark_options("cnbs", 1, {"n_kicks": 2, "progress": print})
+    assert cnbs.own.n_kicks == 2 and cnbs.seed == 1 and runtime == {"progress": print}
     for method, other in (("hks", "alpha"), ("cnbs-local", "n_eigs"), ("user", "refine"), ("fps", "ids")):
         with pytest.raises(InputError, match=f"{method!r} has no option {other!r}"):
             check_method_options(method, {other: 1})
+    with pytest.raises(InputError, match="epsilon"):
+        landmark_options("fps", 0, {"epsilon": -1.0})
+    with pytest.raises(InputError, match="score"):
+        landmark_options("fps", 0, {"score": "sigmaa"})

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from shapecond.selection.cnbs import (HeatMap, best_swap_avoiding, cnbs_landmarks, heat_map, repair_fixing,
+from shapecond.selection.cnbs import (CNBSOptions, HeatMap, HeatMapOptions, best_swap_avoiding, cnbs_landmarks, heat_map, repair_fixing,
                                       swap_scores)
 from shapecond.symmetry.exact import exact_sigma
 from shapecond.symmetry.objective import map_score
@@ -66,7 +66,7 @@ def test_heat_map_is_a_bracketed_lower_bound(prune):
     """Each value is a σ of a feasible map (<= exact σ with p fixed) and >= the swap floor."""
     for seed in range(6):
         D = mirror_pairs_instance(7, seed)
-        hm = heat_map(D, 7, landmarks=[], seed=seed, prune=prune)
+        hm = heat_map(D, 7, landmarks=[], options=HeatMapOptions(seed=seed, prune=prune))
         S = swap_scores(D, 7)
         for p in range(7):
             ex = exact_sigma(D, 7, landmarks=[p]).sigma
@@ -83,7 +83,7 @@ def test_greedy_choice_equals_exact_argmin(seed):
     """For 3 steps, the CNBS landmark has the smallest exact σ among the candidates."""
     n = 8
     D = mirror_pairs_instance(n, 10 + seed, noise=0.05)
-    out = cnbs_landmarks(D, n, 3, seed=0)
+    out = cnbs_landmarks(D, n, 3, options=CNBSOptions(seed=0))
     L = []
     for c, score in zip(out["landmarks"], out["scores"]):
         exact = {p: exact_sigma(D, n, landmarks=L + [p]).sigma for p in range(n) if p not in L}
@@ -103,15 +103,15 @@ def test_argmin_tie_breaks_by_move_then_index():
 def test_animal_first_landmark_off_the_mirror_plane():
     """On the near-symmetric animal (N = 100) the first CNBS landmark is off the mirror plane: the
     mirror fixes the samples on the plane, so fixing one of them lowers σ least."""
-    from shapecond.shapes.metric import build_metric_shape
+    from shapecond.shapes.metric import Sampling, build_metric_shape
     from shapecond.shapes.synthetic import animal
 
     g = animal(delta=0.05)
-    shape = build_metric_shape(g, n_points=100, cache=False)
+    shape = build_metric_shape(g, n_points=100, sampling=Sampling(cache=False))
     x = np.abs(g.vertices[shape.samples[:100], 0])
     on_plane = x < 1e-9
     assert on_plane.sum() >= 3
-    hm = heat_map(shape.D, 100, seed=0)
+    hm = heat_map(shape.D, 100, options=HeatMapOptions(seed=0))
     c = hm.argmin()
     assert not on_plane[c]
     imp = hm.improvement()
@@ -127,8 +127,8 @@ def test_pruned_heat_map_keeps_the_argmin(seed):
     """Pruning stops searches above the incumbent: same argmin, values still lower bounds."""
     n = 16
     D = mirror_pairs_instance(n, 40 + seed, noise=0.04)
-    full = heat_map(D, n, seed=0)
-    cut = heat_map(D, n, seed=0, prune=True)
+    full = heat_map(D, n, options=HeatMapOptions(seed=0))
+    cut = heat_map(D, n, options=HeatMapOptions(seed=0, prune=True))
     c = cut.argmin()
     assert cut.pruned.any()  # otherwise this test tests nothing
     assert not cut.pruned[c]
@@ -146,7 +146,7 @@ def test_pruned_heat_map_never_returns_a_pruned_argmin(max_verify):
     """Whatever the verification budget, the argmin is a fully evaluated candidate with a witness."""
     for seed in range(4):
         D = mirror_pairs_instance(18, 60 + seed, noise=0.05)
-        hm = heat_map(D, 18, seed=0, prune=True, max_verify=max_verify)
+        hm = heat_map(D, 18, options=HeatMapOptions(seed=0, prune=True, max_verify=max_verify))
         c = hm.argmin()
         assert not hm.pruned[c] and c in hm.results
 
@@ -169,24 +169,24 @@ def test_heat_map_is_the_same_in_one_thread_and_in_two(budget):
     try:
         for k in (1, 2):
             numba.set_num_threads(k)
-            out.append([heat_map(D, 60, [3], effort="quick", prune=prune, budget=b).values for prune in (False, True)])
+            out.append([heat_map(D, 60, [3], budget=b, options=HeatMapOptions(effort="quick", prune=prune)).values for prune in (False, True)])
     finally:
         numba.set_num_threads(before)
     for a, c in zip(*out):
         np.testing.assert_array_equal(a, c)
 
 
-def test_cnbs_options_reach_every_heat_map_and_keywords_are_the_same_call():
+def test_cnbs_options_are_one_object_and_the_interface_takes_their_fields():
     from shapecond.selection import method_options
     from shapecond.errors import InputError
-    from shapecond.selection.cnbs import CNBSOptions
 
     D = mirror_pairs_instance(24, 5)
-    a = cnbs_landmarks(D, 24, 2, seed=1, effort="quick", n_kicks=2, n_cross=4, max_verify=1)
-    b = cnbs_landmarks(D, 24, 2, options=CNBSOptions(seed=1, effort="quick", n_kicks=2, n_cross=4, max_verify=1))
-    assert a["landmarks"] == b["landmarks"] and a["scores"] == b["scores"]
+    a = cnbs_landmarks(D, 24, 2, options=CNBSOptions(seed=1, effort="quick", n_kicks=2, n_cross=4, max_verify=1))
+    assert len(a["landmarks"]) == 2 and len(a["scores"]) == 2
     assert {"n_kicks", "n_cross", "max_verify", "resolve_fraction"} <= method_options("cnbs")
     with pytest.raises(InputError):
         CNBSOptions(resolve="sometimes")
+    with pytest.raises(TypeError):  # one call form: a field is not a keyword of the function
+        heat_map(D, 24, n_kicks=2)
     with pytest.raises(TypeError):
-        heat_map(D, 24, n_kick=2)
+        HeatMapOptions(n_kick=2)

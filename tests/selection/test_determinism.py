@@ -8,7 +8,7 @@ import sys
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
 
-from shapecond.selection.cnbs import cnbs_landmarks
+from shapecond.selection.cnbs import CNBSOptions, cnbs_landmarks
 
 from tests.helpers import mirror_pairs_instance
 
@@ -16,12 +16,12 @@ SCRIPT = """
 import json, sys
 sys.path.insert(0, {root!r})
 from tests.helpers import mirror_pairs_instance
-from shapecond.selection.cnbs import cnbs_landmarks
+from shapecond.selection.cnbs import CNBSOptions, cnbs_landmarks
 from shapecond.symmetry.scale import budget_of, default_epsilon
 D = mirror_pairs_instance(120, 7, noise=0.05)
 out = {{}}
 for name, budget in (("sigma", None), ("scale", budget_of(default_epsilon(D), 120, D))):
-    r = cnbs_landmarks(D, 120, 3, seed=0, effort="quick", budget=budget)
+    r = cnbs_landmarks(D, 120, 3, budget=budget, options=CNBSOptions(seed=0, effort="quick"))
     out[name] = [r["landmarks"], [float(v).hex() for v in r["scores"]]]
 print(json.dumps(out))
 """
@@ -53,5 +53,5 @@ def test_cnbs_runs_with_one_blas_thread_whatever_the_caller_allows():
         seen.extend(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
 
     with threadpool_limits(limits=2, user_api="blas"):
-        cnbs_landmarks(mirror_pairs_instance(30, 1), 30, 1, effort="quick", progress=progress)
+        cnbs_landmarks(mirror_pairs_instance(30, 1), 30, 1, progress=progress, options=CNBSOptions(effort="quick"))
     assert seen and set(seen) == {1}

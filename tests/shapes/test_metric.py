@@ -7,11 +7,11 @@ from shapecond.errors import InputError
 from shapecond.shapes import synthetic
 from shapecond.shapes.geometry import Geometry
 from shapecond.shapes.validate import make_geometry
-from shapecond.shapes.metric import build_metric_shape, from_distance_matrix
+from shapecond.shapes.metric import Sampling, build_metric_shape, from_distance_matrix
 
 
 def test_metric_shape_is_a_normalised_metric():
-    s = build_metric_shape(synthetic.bumpy_blob(3), n_points=40, cache=False)
+    s = build_metric_shape(synthetic.bumpy_blob(3), n_points=40, sampling=Sampling(cache=False))
     assert s.D.shape == (40, 40) and np.isclose(s.D.max(), 1.0)
     assert np.allclose(s.D, s.D.T) and np.all(np.diag(s.D) == 0)
     assert s.backend == "heat" and s.metric == "geodesic" and s.n_points == s.n_targets == 40
@@ -25,7 +25,7 @@ def test_cache_returns_the_same_shape(tmp_path, monkeypatch):
     assert len(list(tmp_path.glob("metric-*.npz"))) == 1
     b = build_metric_shape(g, n_points=30)
     assert np.array_equal(a.D, b.D) and np.array_equal(a.samples, b.samples)
-    c = build_metric_shape(g, n_points=30, seed=1)  # a parameter change is a new entry
+    c = build_metric_shape(g, n_points=30, sampling=Sampling(seed=1))  # a parameter change is a new entry
     assert len(list(tmp_path.glob("metric-*.npz"))) == 2 and c is not None
 
 
@@ -35,9 +35,9 @@ def test_invariant_to_relabelling_and_uniform_scaling():
     inv = np.argsort(perm)
     relabelled = make_geometry(g.vertices[perm], inv[g.faces])
     scaled = make_geometry(3.7 * g.vertices, g.faces)
-    base = build_metric_shape(g, n_points=25, landmarks=[11], cache=False)
-    other = build_metric_shape(relabelled, n_points=25, landmarks=[int(inv[11])], cache=False)
-    big = build_metric_shape(scaled, n_points=25, landmarks=[11], cache=False)
+    base = build_metric_shape(g, n_points=25, landmarks=[11], sampling=Sampling(cache=False))
+    other = build_metric_shape(relabelled, n_points=25, landmarks=[int(inv[11])], sampling=Sampling(cache=False))
+    big = build_metric_shape(scaled, n_points=25, landmarks=[11], sampling=Sampling(cache=False))
     assert np.array_equal(perm[other.samples], base.samples)
     assert np.allclose(other.D, base.D, atol=1e-6)
     assert np.array_equal(big.samples, base.samples)
@@ -46,8 +46,8 @@ def test_invariant_to_relabelling_and_uniform_scaling():
 
 def test_dense_targets_have_the_samples_as_prefix():
     g = synthetic.bumpy_blob(3)
-    dense = build_metric_shape(g, n_points=20, target="dense", target_factor=4, cache=False)
-    plain = build_metric_shape(g, n_points=20, cache=False)
+    dense = build_metric_shape(g, n_points=20, sampling=Sampling(target="dense", target_factor=4, cache=False))
+    plain = build_metric_shape(g, n_points=20, sampling=Sampling(cache=False))
     assert dense.n_targets == 80 and dense.n_points == 20
     assert np.array_equal(dense.samples[:20], plain.samples)
     assert np.allclose(dense.D[:20, :20] * dense.scale, plain.D * plain.scale)  # the same geodesics between them
@@ -55,7 +55,7 @@ def test_dense_targets_have_the_samples_as_prefix():
 
 def test_symmetric_animal_samples_are_mirror_closed():
     g = synthetic.animal(resolution=0.05)
-    s = build_metric_shape(g, n_points=40, cache=False)
+    s = build_metric_shape(g, n_points=40, sampling=Sampling(cache=False))
     inv = {v: k for k, v in enumerate(s.samples)}
     mirror = np.array([inv[g.symmetry[v]] for v in s.samples])
     assert np.allclose(s.D[np.ix_(mirror, mirror)], s.D, atol=1e-9)
@@ -70,4 +70,4 @@ def test_matrix_input_and_errors():
     with pytest.raises(InputError, match="fewer than"):
         build_metric_shape(make_geometry(pts.repeat(2, 1)[:, :3]), n_points=10)
     with pytest.raises(InputError, match="zero"):
-        build_metric_shape(Geometry(np.zeros((5, 3)), None, np.arange(5)), n_points=3, metric="euclidean", cache=False)
+        build_metric_shape(Geometry(np.zeros((5, 3)), None, np.arange(5)), n_points=3, sampling=Sampling(metric="euclidean", cache=False))

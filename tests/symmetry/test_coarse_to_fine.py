@@ -11,7 +11,7 @@ from shapecond.symmetry import objective as obj
 from shapecond.symmetry import resolution
 from shapecond.symmetry.resolution import coarse_to_fine, refine, resolution_report
 from shapecond.symmetry.scale import budget_of, default_epsilon
-from shapecond.symmetry.score import symmetry_score
+from shapecond.symmetry.score import ScoreOptions, symmetry_score
 from shapecond.symmetry.search import witness_search
 
 from tests.helpers import brute_sigma, dense_instance, same
@@ -57,7 +57,7 @@ def test_symmetry_score_keeps_the_coarse_level_for_the_report(monkeypatch):
     rng = np.random.default_rng(8)
     n, m = 10, 40
     D = dense_instance(rng, n, m, 2, noise=0.03)
-    sc = symmetry_score(D, n, exact=False)
+    sc = symmetry_score(D, n, options=ScoreOptions(exact=False))
     assert sc.coarse is not None and sc.coarse.witness.max() < m // 2
     assert sc.sigma_lower >= sc.coarse.sigma * (1 - 1e-12)
 
@@ -76,7 +76,7 @@ def test_too_few_targets_for_two_levels_searches_once(m, monkeypatch):
     """M <= 2N + 1: the lower level would be the bijections; one full search as before."""
     monkeypatch.setattr(resolution, "TWO_LEVEL_SECONDS", 0.0)
     D = dense_instance(np.random.default_rng(m), 5, m, 2)
-    sc = symmetry_score(D, 5, exact=False)
+    sc = symmetry_score(D, 5, options=ScoreOptions(exact=False))
     assert sc.coarse is None
     assert same(sc.sigma_lower, witness_search(D, 5).sigma)
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from shapecond.errors import TooLargeError
-from shapecond.shapes.metric import build_metric_shape
+from shapecond.shapes.metric import Sampling, build_metric_shape
 from shapecond.shapes.synthetic import generate
 from shapecond.symmetry import objective
 from shapecond.symmetry.exact import exact_sigma
@@ -26,7 +26,7 @@ def test_quadratic_forms_are_d2_and_dist2_of_a_map():
 
 @pytest.mark.parametrize("name,n", [("animal", 12), ("blob", 10)])
 def test_lambda0_is_negative_on_generated_meshes(name, n):
-    shape = build_metric_shape(generate(name), n_points=n, metric="geodesic", cache=False)
+    shape = build_metric_shape(generate(name), n_points=n, sampling=Sampling(metric="geodesic", cache=False))
     diag = paper_eigen_diagnostic(shape.D)
     assert diag.lambda_0 < 0 and diag.paper_value is None and not diag.is_bound
     assert diag.n_negative > 0 and diag.trace_A == 0.0

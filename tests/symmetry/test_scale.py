@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.distance import cdist
 
-from shapecond.selection import monotone, select_landmarks
+from shapecond.selection import LandmarkOptions, monotone, select_landmarks
 from shapecond.selection.cnbs import HeatMap, full_heat_map, heat_map
 from shapecond.shapes.metric import from_distance_matrix
 from shapecond.symmetry import objective as obj
@@ -104,7 +104,7 @@ def test_cnbs_scale_landmarks_have_non_increasing_scores():
     assert res.score == "scale" and len(res.landmarks) == 4
     assert list(res.scores) == sorted(res.scores, reverse=True)
     assert res.initial_score >= res.scores[0]
-    base = select_landmarks(shape, 4, "fps", scores=True, score="scale")
+    base = select_landmarks(shape, 4, "fps", options=LandmarkOptions(scores=True, score="scale"))
     assert base.score == "scale" and list(base.scores) == sorted(base.scores, reverse=True)
 
 

@@ -92,7 +92,7 @@ def test_html_shows_the_png_colours(heat):
 
 
 def test_decimation_keeps_ids_and_says_so():
-    g = generate("sphere", subdivisions=5)  # 10,242 vertices
+    g = generate("sphere", {"subdivisions": 5})  # 10,242 vertices
     ids = np.arange(g.n_vertices) * 3 + 7
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 2], landmarks=[5, 9])], ids=ids)
     small, note = H.decimate(scene, 2000)
@@ -105,7 +105,7 @@ def test_decimation_keeps_ids_and_says_so():
 
 @pytest.mark.slow
 def test_a_50k_vertex_page_is_a_few_mb():
-    g = generate("sphere", subdivisions=7)  # 163,842 vertices: decimated to 50k at most
+    g = generate("sphere", {"subdivisions": 7})  # 163,842 vertices: decimated to 50k at most
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 0])])
     document = H.page("big", [H.viewer(scene)])
     assert len(document.encode()) < 5e6
@@ -203,7 +203,7 @@ def _check(page, errors, requests, path: Path, k: int = 0):
 
 def test_browser_heatmap_page(browser, tmp_path):
     # an unreferenced first vertex: the input's ids are 1..n, not the internal 0..n-1
-    g = generate("animal", resolution=0.05)
+    g = generate("animal", {"resolution": 0.05})
     V = np.vstack([[9.0, 9.0, 9.0], g.vertices])
     res = sc.heatmap((V, g.faces + 1), n_points=20, cache=False, effort="quick")
     path = Path(res.to_html(tmp_path / "heat.html"))
@@ -252,7 +252,7 @@ def test_browser_local_page(browser, tmp_path, capsys):
 
 
 def test_browser_decimated_page(browser, tmp_path):
-    g = generate("sphere", subdivisions=5)
+    g = generate("sphere", {"subdivisions": 5})
     scene = make_scene(g.vertices, g.faces, [dict(values=g.vertices[:, 2])], ids=np.arange(g.n_vertices) + 100)
     path = tmp_path / "dec.html"
     path.write_text(H.page("decimated", [H.viewer(scene, max_vertices=1500)]))
@@ -262,7 +262,7 @@ def test_browser_decimated_page(browser, tmp_path):
 
 
 def test_browser_evaluation_report(browser, tmp_path):
-    from shapecond.evaluation import evaluate_dataset
+    from shapecond.evaluation import EvaluationOptions, evaluate_dataset
     from shapecond.evaluation.report import write_report
     from shapecond.shapes.synthetic import plane_patch
 
@@ -275,7 +275,7 @@ def test_browser_evaluation_report(browser, tmp_path):
             f.write(f"OFF\n{len(V)} {len(g.faces)} 0\n")
             f.writelines(f"{x} {y} {z}\n" for x, y, z in V)
             f.writelines(f"3 {a} {b} {c}\n" for a, b, c in g.faces)
-    ev = evaluate_dataset(root, methods=("fps", "hks"), matchers=("faq",), n_points=16, cache=False)
+    ev = evaluate_dataset(root, options=EvaluationOptions(methods=("fps", "hks"), matchers=("faq",), n_points=16, cache=False))
     write_report(ev, tmp_path / "out")
     path = tmp_path / "out" / "report.html"
     document = path.read_text()
@@ -316,7 +316,8 @@ PATHS = dict(source="my shapes/a.off", target="b.off", output="map.txt", html="p
 
 def test_match_page_knows_the_command_and_the_suggestions(pair_result, tmp_path):
     src, tgt = pair_result.drawing[:2]
-    document = pages.result_page(pair_result, command=PATHS, suggestions=[(7, "bar after: 0.021"), (90, None)])
+    document = pages.result_page(pair_result, pages.PageOptions(command=PATHS,
+                                                                suggestions=[(7, "bar after: 0.021"), (90, None)]))
     data = _data(document)[0]
     p = data["picking"]
     assert (p["source"], p["target"], p["output"], p["html"]) == ("'my shapes/a.off'", "b.off", "map.txt", "page.html")
@@ -329,28 +330,24 @@ def test_match_page_knows_the_command_and_the_suggestions(pair_result, tmp_path)
     for bad in (dict(command=dict(sorce="a.off")), dict(suggestions=[(src.n_vertices, "x")]),
                 dict(suggestions=[(-1, "x")]), dict(suggestions=[(1.5, "x")])):
         with pytest.raises(InputError):
-            pages.result_page(pair_result, **bad)
+            pages.result_page(pair_result, pages.page_options(pair_result, bad))
 
 
 def test_to_html_takes_the_declared_options_and_refuses_the_others_in_one_line(pair_result):
-    """``pages.PAGE_OPTIONS`` is what each result's page function takes besides what ``result_page`` sets
-    itself; a match's ``lines`` (set by its page) was a TypeError, it is refused like a misspelling."""
-    import inspect
+    """``pages.PAGE_OPTIONS`` names, for each result type, the ``PageOptions`` its page reads; any other
+    keyword of ``to_html`` (a match's ``lines``, set by its page, was a TypeError) is refused like a
+    misspelling, before anything is drawn."""
+    from dataclasses import fields
 
-    def keywords(*functions, given=()):
-        return {name for f in functions for name, p in inspect.signature(f).parameters.items()
-                if p.default is not p.empty} - set(given)
-
-    assert set(pages.PAGE_OPTIONS["ScoreResult"]) == keywords(pages.score_page)
-    assert set(pages.PAGE_OPTIONS["HeatMapResult"]) == keywords(pages.heatmap_page, given=("landmarks", "lines"))
-    assert set(pages.PAGE_OPTIONS["LandmarkResult"]) == keywords(pages.landmarks_page)
-    assert set(pages.PAGE_OPTIONS["LocalResult"]) == keywords(pages.local_page, given=("fixed", "result"))
-    assert set(pages.PAGE_OPTIONS["MatchResult"]) == keywords(
-        pages._match_result_page, pages.match_page, given=("landmarks_source", "landmarks_target", "fields", "lines"))
-    assert "a distinctive title" in pages.result_page(pair_result, title="a distinctive title", up="z")
+    assert set().union(*pages.PAGE_OPTIONS.values()) == {f.name for f in fields(pages.PageOptions)}
+    options = pages.page_options(pair_result, dict(title="a distinctive title", up="z"))
+    assert options == pages.PageOptions(title="a distinctive title", up="z")
+    assert "a distinctive title" in pages.result_page(pair_result, options)
     for bad in ("lines", "landmarks_source", "titel"):
         with pytest.raises(InputError, match=f"unknown option {bad!r} \\(its options: truth, suggestions"):
-            pages.result_page(pair_result, **{bad: ()})
+            pages.page_options(pair_result, {bad: ()})
+        with pytest.raises(InputError, match=f"unknown option {bad!r}"):
+            pair_result.to_html("never-written.html", **{bad: ()})
 
 
 def test_match_page_stands_shapes_upright(pair_result):

@@ -11,8 +11,8 @@ from shapecond.errors import InputError
 from shapecond.symmetry.starts import classical_mds
 from shapecond.viz.heatmap import render_heatmap_png
 from shapecond.viz.ply import write_ply
-from shapecond.viz.render import render_png, view_rotation
-from shapecond.viz.scene import interpolate_to_vertices
+from shapecond.viz.render import Look, render_png, view_rotation
+from shapecond.viz.scene import Colouring, interpolate_to_vertices
 from shapecond.viz.witness import render_witness_png
 
 
@@ -35,21 +35,22 @@ def test_view_rotation_is_orthonormal():
 
 def test_render_mesh_with_landmarks(tmp_path, box):
     v, f = box
-    plain = render_png(tmp_path / "a.png", v, f, v[:, 0], views=((20, 30), (5, 0)))
-    marked = render_png(tmp_path / "b.png", v, f, v[:, 0], landmarks=[0, 1, 2, 3], views=((20, 30), (5, 0)),
-                        cmap="Greys")
+    two = ((20, 30), (5, 0))
+    plain = render_png(tmp_path / "a.png", v, f, v[:, 0], look=Look(views=two))
+    marked = render_png(tmp_path / "b.png", v, f, v[:, 0], landmarks=[0, 1, 2, 3],
+                        look=Look(views=two, colouring=Colouring("Greys")))
     a, b = mpimg.imread(plain), mpimg.imread(marked)
     assert a.shape[0] > 200 and a.shape[1] > 400
     # a grey colour map with red markers: red pixels exist only where the landmarks are
     assert _red_pixels(b) > 20
-    grey = render_png(tmp_path / "c.png", v, f, v[:, 0], views=((20, 30), (5, 0)), cmap="Greys")
+    grey = render_png(tmp_path / "c.png", v, f, v[:, 0], look=Look(views=two, colouring=Colouring("Greys")))
     assert _red_pixels(mpimg.imread(grey)) == 0
 
 
 def test_render_point_cloud_and_colours(tmp_path, box):
     v, _ = box
     col = np.tile([1.0, 0.0, 0.0], (len(v), 1))
-    out = render_png(tmp_path / "p.png", v, None, col, point_size=20)
+    out = render_png(tmp_path / "p.png", v, None, col, look=Look(point_size=20))
     assert _red_pixels(mpimg.imread(out)) > 100
 
 
@@ -62,7 +63,7 @@ def test_render_bad_input(tmp_path, box):
     with pytest.raises(InputError):
         render_png(tmp_path / "x.png", v, f + len(v))
     with pytest.raises(InputError):
-        render_png(tmp_path / "x.png", v, f, up="w")
+        render_png(tmp_path / "x.png", v, f, look=Look(up="w"))
     assert not list(tmp_path.iterdir())  # nothing half-written
 
 
@@ -150,7 +151,7 @@ def test_guess_up_finds_the_feet_whatever_the_axis():
     from shapecond.shapes.synthetic import generate
     from shapecond.viz.scene import guess_up, up_frame
 
-    g = generate("animal", resolution=0.05)
+    g = generate("animal", {"resolution": 0.05})
     for up, V in rotations(g).items():
         shape = SimpleNamespace(vertices=V, faces=g.faces)
         assert guess_up(shape) == up and guess_up(shape, shape) == up

@@ -13,7 +13,6 @@ its doubt field and HTML page (``limits.local_seconds``).  Per-unit costs are
 
 from __future__ import annotations
 
-from ..checks import check_int
 from ..errors import TooLargeError
 from ..limits import (check_cost, dense_stage_seconds, geodesic_seconds, human_bytes, lh05_affinity_bytes, local_seconds, metric_bytes,
                       search_seconds)
@@ -47,14 +46,14 @@ def guard_local(n_vertices: int, force: bool, doubt: bool = False, html: bool = 
     check_cost(what, local_seconds(n_vertices, doubt, html), force=force)
 
 
-def matcher_bytes(matcher: str, n_points: int, n_landmarks: int, options: dict, what: str) -> float:
-    """Memory of the matcher itself (LH05's dense affinity matrix), checked before any geodesic:
-    beyond ``spectral.MAX_AFFINITY_BYTES`` the matcher refuses whatever ``force`` says."""
-    if matcher != "lh05":
+def matcher_bytes(n_points: int, n_landmarks: int, options, what: str) -> float:
+    """Memory of the matcher itself (LH05's dense affinity matrix; ``options``: its ``LH05Options``, another
+    matcher's options or None), checked before any geodesic: beyond ``spectral.MAX_AFFINITY_BYTES`` the
+    matcher refuses whatever ``force`` says."""
+    if not isinstance(options, LH05Options):
         return 0.0
-    k = options.get("k", LH05Options().k)  # the declared default
-    nested = options.get("nested", True) and core_size(n_landmarks) is not None
-    nbytes = lh05_affinity_bytes(n_points, core_size(n_landmarks) if nested else n_landmarks, check_int(k, "k", lo=1))
+    nested = options.nested and core_size(n_landmarks) is not None
+    nbytes = lh05_affinity_bytes(n_points, core_size(n_landmarks) if nested else n_landmarks, options.k)
     if nbytes > MAX_AFFINITY_BYTES:
         raise TooLargeError(f"{what}: LH05's affinity matrix would need about {human_bytes(nbytes)}, more than the "
                             f"{human_bytes(MAX_AFFINITY_BYTES)} it allows; use fewer samples or a smaller k "
@@ -72,7 +71,7 @@ def guard_match(n_vertices: int, n_points: int, n_landmarks: int, options, force
     zoomout = "zoomout" in (options.matcher, options.dense)
     what = (f"matching with {n_points} samples on {n_vertices} vertices ({options.backend} distances"
             + (", ZoomOut dense stage)" if zoomout else ")"))
-    nbytes = matcher_bytes(options.matcher, n_points, n_landmarks, options.matcher_options, what)
+    nbytes = matcher_bytes(n_points, n_landmarks, options.matcher_options, what)
     seconds = 2 * geodesic_seconds(n_vertices, n_points, options.backend)
     if zoomout:
         seconds += dense_stage_seconds(n_vertices, n_vertices)

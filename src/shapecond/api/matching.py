@@ -29,25 +29,31 @@ _SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "large
 _DECLARED = {"lh05": LH05Options, "faq": FAQOptions}
 
 
-def _matcher_options(matcher: str, options: dict) -> dict:
-    """The sample matcher's own options, refused before any work when unknown."""
+def _matcher_options(matcher: str, options: dict, seed: int):
+    """The sample matcher's options object (``LH05Options`` or ``FAQOptions``, FAQ's seeded by ``seed``;
+    None for zoomout) from ``match``'s other keywords, an unknown one refused before any work."""
     check_choice(matcher, "matcher", MATCHERS)
     declared = _DECLARED.get(matcher)  # zoomout declares none
     known = set() if declared is None else {f.name for f in fields(declared)} - {"seed"}  # seed: match's own
     if set(options) - known:  # refused before the geodesics, not as a TypeError after them
         raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
                          f"{matcher!r} (its options: {', '.join(sorted(known)) or 'none'})")
-    return options
+    if declared is None:
+        return None
+    return declared(**options, **({"seed": seed} if declared is FAQOptions else {}))
 
 
 def _match_options(matcher, n_points, dense, samples, options: dict):
     """``MatchOptions`` and the load settings from ``match``'s keywords (each checked once)."""
     settings = {k: options.pop(k, v) for k, v in _SETTINGS.items()}
+    seed = check_seed(settings["seed"])
+    if "k" in options:
+        options["k"] = check_int(options["k"], "k", lo=1)
     opts = MatchOptions(matcher=matcher, n_points=check_int(n_points, "n_points", lo=3),
                         backend=check_choice(settings["backend"], "backend", BACKENDS),
-                        seed=check_seed(settings["seed"]), dense=dense, samples=samples,
+                        seed=seed, dense=dense, samples=samples,
                         cache=check_flag(settings["cache"], "cache"),
-                        matcher_options=_matcher_options(matcher, options))
+                        matcher_options=_matcher_options(matcher, options, seed))
     flags = {k: check_flag(settings[k], k) for k in ("largest_component", "force", "error_bar")}
     flags["suggest"] = check_int(settings["suggest"], "suggest", lo=0)
     if flags["suggest"] and not flags["error_bar"]:
@@ -69,14 +75,13 @@ def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
             raise InputError(f"{name} landmark {bad[0]} is out of range (rows 0..{D.shape[0] - 1})")
     if tgt.shape[0] < src.shape[0]:
         raise InputError(f"the target matrix has fewer rows ({tgt.shape[0]}) than the source ({src.shape[0]})")
-    sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, opts.matcher, seed=opts.seed,
-                       **opts.matcher_options)
+    sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, opts.matcher_options)
     summary.update(n_points=int(src.shape[0]), matcher_info=sm.info)
     return MatchResult(np.asarray(sm.t, dtype=np.int64), summary)
 
 
 def match(source, target, landmarks_source, landmarks_target, *, matcher: str = "lh05",
-          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", samples: str = "fps", **options) -> MatchResult:
+          n_points: int = DEFAULT_POINTS, dense: str = "zoomout", **options) -> MatchResult:
     """Match ``source`` to ``target`` with corresponding landmarks fixed (input ids, same order).
 
     Parameters
@@ -89,9 +94,9 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     dense : how the map reaches every vertex: "zoomout" (landmark-anchored ZoomOut on the
         Laplace–Beltrami bases, ``matching.zoomout``), or the plain extensions of the sample
         map "distances" and "nearest" (``matching.dense``).
-    samples : "fps" (each shape its own samples) or "same-ids" (the target sampled at the
-        source's sample vertices: shapes with one vertex order; the summary gives the error).
-    **options : ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``,
+    **options : ``samples`` ("fps", the default: each shape its own samples; or "same-ids": the target
+        sampled at the source's sample vertices, for shapes with one vertex order; the summary gives the
+        error), ``seed``, ``backend`` (geodesics), ``cache``, ``force``, ``largest_component``,
         ``error_bar`` (default True: also estimate the map's error without ground truth,
         ``matching.error_bar``: the mean displacement of δ(ε̂)'s witness on the source, ε̂ the
         map's own distortion), ``suggest`` (how many next landmarks to suggest, ``matching.suggest``; needs
@@ -112,7 +117,8 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     >>> r.map.shape[0] == sc.load(shape).n_vertices
     True
     """
-    opts, flags = _match_options(matcher, n_points, dense, samples, dict(options))
+    options = dict(options)
+    opts, flags = _match_options(matcher, n_points, dense, options.pop("samples", "fps"), options)
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     src, tgt = _inputs(source, target, ids_s, ids_t, flags)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}

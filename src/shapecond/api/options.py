@@ -10,10 +10,11 @@ work instead of being ignored or failing as a ``TypeError`` after it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
-from ..checks import check_flag
+from ..checks import check_choice, check_flag, check_float
 from ..errors import InputError
+from ..selection import CNBS_EXTRAS, COMMON_OPTIONS, SCORES, LandmarkOptions, check_method_options, own_options_class
 from ..shapes.metric import Sampling
 
 #: Geodesic backends a user may ask for (``shapes.geodesics``; "euclidean" comes with ``metric``).
@@ -81,3 +82,27 @@ class ShapeOptions:
         rest = {k: v for k, v in options.items() if k not in names}
         refuse_unknown({k: v for k, v in rest.items() if k not in others}, caller)
         return cls(**mine), rest
+
+
+def landmark_options(method: str, seed: int, options: dict) -> tuple[LandmarkOptions, dict]:
+    """The ``selection.LandmarkOptions`` of ``select_landmarks`` from the flat keywords of ``landmarks``,
+    each checked here (``InputError`` naming it), and CNBS's ``base`` and ``progress`` (a dict).
+
+    ``options``: the keywords every method takes (``COMMON_OPTIONS``) and the method's own (the fields
+    of ``selection.own_options_class(method)``; for CNBS also ``options``, a ``CNBSOptions`` whose
+    fields the other keywords replace); a name the method does not take is refused.
+    """
+    check_method_options(method, options)
+    kw = dict(options)
+    runtime = {k: kw.pop(k) for k in CNBS_EXTRAS if k in kw}
+    common = {k: kw.pop(k) for k in COMMON_OPTIONS if k in kw}
+    if common.get("epsilon") is not None:  # every method takes it; a bad value is refused by all
+        common["epsilon"] = check_float(common["epsilon"], "epsilon", lo=0.0)
+    if common.get("score") is not None:
+        check_choice(common["score"], "score", SCORES)
+    if "effort" in common:
+        common["effort"] = check_choice(common["effort"], "effort", EFFORTS)
+    common["fixed"] = tuple(int(v) for v in common.get("fixed", ()))
+    cls, start = own_options_class(method), runtime.pop("options", None)
+    own = None if cls is None else replace(start, **kw) if isinstance(start, cls) else cls(**kw)
+    return LandmarkOptions(seed=seed, own=own, **common), runtime

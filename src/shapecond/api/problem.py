@@ -8,14 +8,14 @@ import time
 import numpy as np
 
 from ..checks import check_choice, check_float, check_int, check_seed, parse_ids
-from ..selection import check_method_options, select_landmarks
-from ..selection.cnbs import RESOLVE_FRACTION, heat_map
+from ..selection import select_landmarks
+from ..selection.cnbs import RESOLVE_FRACTION, HeatMapOptions, heat_map
 from ..symmetry.report import score_report
 from ..symmetry.scale import budget_of, default_epsilon
 from ..symmetry.search import witness_search
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import shape_of
-from .options import EFFORTS, ShapeOptions, refuse_unknown
+from .options import EFFORTS, ShapeOptions, landmark_options, refuse_unknown
 from .results import HeatMapResult, LandmarkResult, ScoreResult, promote
 from .settings import score_settings
 
@@ -106,8 +106,8 @@ class SymmetryProblem:
             budget, unit = budget_of(eps, n, self.shape.D), 1.0 / math.sqrt(n)
         else:
             base = self.search(ids)
-        hm = heat_map(self.shape.D, n, landmarks=L, base=base, seed=self.seed, effort=self.effort,
-                      resolve_fraction=frac, budget=budget)
+        hm = heat_map(self.shape.D, n, L, base, budget,
+                      options=HeatMapOptions(seed=self.seed, effort=self.effort, resolve_fraction=frac))
         best = hm.argmin()  # values in the score's units: δ = sqrt(d²) / sqrt(N)
         return HeatMapResult(np.asarray(self.shape.sample_ids), hm.values * unit, float(hm.sigma_before) * unit,
                              int(self.shape.sample_ids[best]), float(hm.values[best]) * unit, tuple(ids),
@@ -116,14 +116,13 @@ class SymmetryProblem:
     def landmarks(self, k: int, method: str = "cnbs", *, fixed=(), scores: bool | None = None,
                   **options) -> LandmarkResult:
         """``k`` new landmarks after ``fixed`` (input ids of samples); CNBS starts from the kept search."""
-        check_method_options(method, options)
         k = check_int(k, "k", lo=0)
-        L = list(self._indices(fixed))
+        chosen, runtime = landmark_options(method, self.seed, {**options, "scores": scores, "effort": self.effort,
+                                                               "fixed": self._indices(fixed)})
         guard_landmarks(self.shape, k, method, scores, self.force)
         if method == "cnbs":
-            options.setdefault("base", self.search(fixed))
-        sel = select_landmarks(self.shape, k, method, seed=self.seed, scores=scores, effort=self.effort,
-                               fixed=L, **options)
+            runtime.setdefault("base", self.search(fixed))
+        sel = select_landmarks(self.shape, k, method, chosen, **runtime)
         return promote(sel, LandmarkResult)
 
 

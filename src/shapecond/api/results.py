@@ -15,7 +15,7 @@ interface, the same fields plus:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -28,20 +28,42 @@ from ..symmetry.condition import ProbeResult
 from ..symmetry.report import ScoreReport
 
 
-def promote(result, cls, **extra):
-    """``result`` (a maths dataclass) as the interface's subclass ``cls``, with ``extra`` fields set."""
+def style_of(cls, style: dict, defaults: dict):
+    """The drawing options ``cls`` (a frozen dataclass of ``viz``) of a ``plot`` call's keywords ``style`` over
+    ``defaults`` (a dict of fields); a keyword that is not one of its fields is refused in one line (``InputError``)."""
+    known = {f.name for f in fields(cls)}
+    unknown = sorted(set(style) - known)
+    if unknown:
+        raise InputError(f"plot() got an unknown option {unknown[0]!r} (its options: {', '.join(sorted(known))})")
+    return cls(**{**defaults, **style})
+
+
+def look_of(style: dict, colouring, defaults: dict):
+    """The ``viz.render.Look`` of a ``plot`` call's keywords ``style``: the fields of ``Look`` and the colouring
+    keywords ``cmap``, ``vmin``, ``vmax`` and ``colorbar_label`` (over ``colouring``, a ``viz.scene.Colouring``)."""
+    from ..viz.render import Look
+
+    style = dict(style)
+    paint = {name: style.pop(key) for key, name in (("cmap", "cmap"), ("vmin", "vmin"), ("vmax", "vmax"),
+                                                   ("colorbar_label", "label")) if key in style}
+    return style_of(Look, style, {**defaults, "colouring": replace(colouring, **paint)})
+
+
+def promote(result, cls, extra: dict | None = None):
+    """``result`` (a maths dataclass) as the interface's subclass ``cls``, with the fields ``extra`` set."""
     values = {f.name: getattr(result, f.name) for f in fields(result) if f.init}
-    return cls(**values, **extra)
+    return cls(**values, **(extra or {}))
 
 
 class Pictures:
     """``to_html`` and ``_repr_html_`` of every result (``viz.pages`` chooses the page by type)."""
 
     def to_html(self, path, **kw) -> str:
-        """Write this result as a self-contained HTML page; returns the path."""
-        from ..viz.pages import write_result
+        """Write this result as a self-contained HTML page; returns the path.  ``kw``: the options of its
+        page (``viz.pages.PAGE_OPTIONS``: ``title``, ``up``...), an unknown one refused in one line."""
+        from ..viz.pages import page_options, write_result
 
-        return write_result(self, path, **kw)
+        return write_result(self, path, page_options(self, kw))
 
     def _repr_html_(self):
         from ..viz.pages import inline_result
@@ -57,17 +79,22 @@ class ScoreResult(ScoreReport, Pictures):
     ``.witness_ids``, ``.verdict``, ``.scale`` (δ(ε)) are the report's.
     """
 
-    def plot(self, fig=None, path=None, *, scale: bool = False, **kw):
-        """The witness map (``scale=True``: the scale-aware witness of δ(ε)) drawn on the shape.
+    def plot(self, fig=None, path=None, *, scale: bool = False, max_segments: int = 80, **style):
+        """The witness map (``scale=True``: the scale-aware witness of δ(ε)) drawn on the shape, its
+        ``max_segments`` longest moves as chords; ``style``: ``up`` (None: guessed), ``views``, ``title``
+        (``viz.scene.Place``).
 
         Onto ``fig`` (or a new Figure) and returned, or written to ``path`` (PNG; returns the path).
         """
+        from ..viz.scene import Place
         from ..viz.witness import render_witness_png
 
+        place = style_of(Place, style, {"up": None})
         if self.shape.geometry is None and path is not None:
             raise InputError("a witness picture needs a mesh or point cloud")
         witness = self.scale.witness if scale else self.score.witness
-        return render_witness_png(self.shape, witness, path, landmarks=tuple(self.score.landmarks), fig=fig, **kw)
+        return render_witness_png(self.shape, witness, path, landmarks=tuple(self.score.landmarks), fig=fig,
+                                  place=place, max_segments=max_segments)
 
 
 @dataclass(frozen=True)
@@ -78,10 +105,13 @@ class LandmarkResult(LandmarkSelection, Pictures):
         scores = ", ".join("-" if s is None else f"{s:.4g}" for s in self.scores)
         return f"LandmarkResult({self.method}, landmarks={list(self.landmarks)}, {self.score} after each: [{scores}])"
 
-    def plot(self, fig=None, path=None, **kw):
-        """The landmarks (paper Figure 6 colours) drawn on the shape; onto ``fig`` or written to ``path``."""
+    def plot(self, fig=None, path=None, **style):
+        """The landmarks (paper Figure 6 colours) drawn on the shape; onto ``fig`` or written to ``path``.
+        ``style``: the fields of ``viz.render.Look`` (``up``, ``views``, ``title``...) and ``cmap``, ``vmin``,
+        ``vmax``, ``colorbar_label`` (``look_of``)."""
         from ..symmetry.starts import classical_mds
         from ..viz.render import new_figure, render_png
+        from ..viz.scene import Colouring
 
         shape = self.shape
         if shape.geometry is not None:
@@ -89,9 +119,10 @@ class LandmarkResult(LandmarkSelection, Pictures):
         else:  # a distance matrix: its points placed by classical MDS
             V, F, verts = classical_mds(shape.D), None, list(self.sample_indices)
         size = 6.0 if F is not None or len(V) > 2000 else 30.0
+        look = look_of(style, Colouring(), {"point_size": size})
         if path is None:
             fig = fig if fig is not None else new_figure()
-        return render_png(path, V, F, None, verts, point_size=size, fig=fig, **kw)
+        return render_png(path, V, F, None, verts, fig=fig, look=look)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -115,19 +146,21 @@ class LocalResult(LocalScore, Pictures):
             self._doubt["field"] = local_heatmap(problem, g.to_internal(self.landmarks), zero_tol=zero_tol)
         return self._doubt["field"]
 
-    def plot(self, fig=None, path=None, **kw):
-        """The doubt field (``doubt``) drawn on the mesh; onto ``fig`` or written to ``path``."""
+    def plot(self, fig=None, path=None, **style):
+        """The doubt field (``doubt``) drawn on the mesh; onto ``fig`` or written to ``path``.  ``style``:
+        the fields of ``viz.render.Look`` (``up``, ``views``, ``title``...) and ``cmap``, ``vmin``,
+        ``vmax``, ``colorbar_label`` (``look_of``)."""
         from ..viz.render import new_figure, render_png
-        from ..viz.scene import guess_up
+        from ..viz.scene import Colouring, guess_up
 
         hm = self.doubt()
         g = self.drawing[0]
+        look = look_of(style, Colouring(label="sigma_inf with the vertex fixed"),
+                       {"title": f"{g.name}: local score with each vertex fixed", "up": style.get("up") or guess_up(g)})
         if path is None:
             fig = fig if fig is not None else new_figure()
-        kw.setdefault("title", f"{g.name}: local score with each vertex fixed")
-        kw.setdefault("up", guess_up(g))
         return render_png(path, g.vertices, g.faces, hm.values, landmarks=[int(v) for v in g.to_internal(self.landmarks)],
-                          colorbar_label="sigma_inf with the vertex fixed", fig=fig, **kw)
+                          fig=fig, look=look)
 
 
 @dataclass(frozen=True, repr=False)
@@ -202,14 +235,16 @@ class HeatMapResult(Pictures):
         return (f"{name} with each point fixed (before: {fmt(self.sigma_before)}; best: {fmt(self.best_value)} "
                 f"at vertex {self.best})")
 
-    def plot(self, fig=None, path=None, **kw):
+    def plot(self, fig=None, path=None, *, ply=None, **style):
         """The heat map drawn on the shape; onto ``fig`` (or a new Figure) or written to ``path``
-        (``ply=FILE``: also a coloured PLY)."""
+        (``ply=FILE``: also a coloured PLY).  ``style``: the fields of ``viz.scene.HeatMapStyle`` (``up``,
+        ``views``, ``title``, ``method``, ``cmap``, ``colorbar_label``, ``log``)."""
         from ..viz.heatmap import render_heatmap_png
+        from ..viz.scene import HeatMapStyle
 
-        kw.setdefault("title", self.title())
+        hm_style = style_of(HeatMapStyle, style, {"title": self.title()})
         return render_heatmap_png(self.shape, self.plot_values(), path, landmarks=list(range(len(self.landmarks))),
-                                  fig=fig, **kw)
+                                  ply=ply, fig=fig, style=hm_style)
 
 
 @dataclass(frozen=True, eq=False)
@@ -261,22 +296,23 @@ class MatchResult(Pictures):
         then measured at the source's reference vertices); see ``viz.truth.truth_map``."""
         return super().to_html(path, truth=truth, **kw)
 
-    def plot(self, fig=None, path=None, **kw):
+    def plot(self, fig=None, path=None, **style):
         """The error bar's doubt field drawn on the source (where the next landmark should go), landmarks
-        ringed; onto ``fig`` (or a new Figure) and returned, or written to ``path`` (PNG)."""
+        ringed; onto ``fig`` (or a new Figure) and returned, or written to ``path`` (PNG).  ``style``: the
+        fields of ``viz.render.Look`` (``up``, ``views``, ``title``...) and ``cmap``, ``vmin``, ``vmax``,
+        ``colorbar_label`` (``look_of``)."""
         from ..viz.render import new_figure, render_png
-        from ..viz.scene import guess_up
+        from ..viz.scene import Colouring, guess_up
 
         if self.doubt is None or self.drawing is None:
             raise InputError("the map has no doubt field to draw: match two surfaces with error_bar=True")
         src = self.drawing[0]
+        look = look_of(style, Colouring("turbo", label="doubt, sqrt(area)"),
+                       {"title": f"{src.name}: the error bar's doubt (sqrt(area))", "up": style.get("up") or guess_up(src)})
         if path is None:
             fig = fig if fig is not None else new_figure()
-        kw.setdefault("title", f"{src.name}: the error bar's doubt (sqrt(area))")
-        kw.setdefault("up", guess_up(src))
-        kw.setdefault("cmap", "turbo")
         return render_png(path, src.vertices, src.faces, self.doubt[src.ids], landmarks=list(self.drawing[2]),
-                          colorbar_label="doubt, sqrt(area)", fig=fig, **kw)
+                          fig=fig, look=look)
 
     def __repr__(self) -> str:
         s = self.summary

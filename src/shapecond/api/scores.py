@@ -19,12 +19,12 @@ import numpy as np
 from ..checks import check_choice, check_float, check_int, parse_ids
 from ..deformation.local_score import ZERO_TOL, LocalProblem
 from ..errors import InputError
-from ..selection import check_method_options, select_landmarks
+from ..selection import select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
 from ..symmetry.report import score_report
 from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
-from .options import EFFORTS, ShapeOptions, refuse_unknown
+from .options import EFFORTS, ShapeOptions, landmark_options, refuse_unknown
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 from .settings import score_settings
 
@@ -33,8 +33,7 @@ DEFAULT_KAPPA_POINTS = 8
 
 
 def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: bool = False,
-          time_limit: float | None = None, effort: str = "default", epsilon: float | None = None,
-          **options) -> ScoreResult:
+          time_limit: float | None = None, effort: str = "default", **options) -> ScoreResult:
     """How hard ``x`` is to match: the σ bracket (paper Eq. 5), κ bracket, witness, δ(ε) and verdict.
 
     Parameters
@@ -50,8 +49,8 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
         ``to_dict()["time_limited"]`` and a note say so.  None: the searches run in full
         (deterministic) and each solve gets 10 s.
     effort : "quick", "default" or "thorough" work of the witness search.
-    epsilon : distortion level of the scale-aware score δ(ε) (default: the median sample spacing).
-    **options : the options of ``metric_shape`` (``seed``, ``force``, ``backend``, ...).
+    **options : ``epsilon``, the distortion level of the scale-aware score δ(ε) (default: the median
+        sample spacing), and the options of ``metric_shape`` (``seed``, ``force``, ``backend``, ...).
 
     Returns
     -------
@@ -68,9 +67,9 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     >>> result.verdict.startswith("exact symmetry")
     True
     """
-    opts, _ = ShapeOptions.take(options, "score")
-    settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=effort, epsilon=epsilon,
-                              seed=opts.seed, force=opts.force)
+    opts, extra = ShapeOptions.take(options, "score", others=("epsilon",))
+    settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=effort,
+                              epsilon=extra.get("epsilon"), seed=opts.seed, force=opts.force)
     shape = shape_of(x, n_points, landmarks, opts)
     report = score_report(shape, parse_ids(landmarks), settings)
     return promote(report, ScoreResult)
@@ -97,7 +96,7 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     problem = LocalProblem(g.vertices, g.faces, alpha=alpha, energy=energy)
     result = problem.score(g.to_internal(parse_ids(landmarks)), zero_tol=zero_tol, ids=g.ids)
     result = replace(result, seconds=time.perf_counter() - t0)  # building and factorising the Hessian included
-    return promote(result, LocalResult, drawing=(g, problem, zero_tol))
+    return promote(result, LocalResult, {"drawing": (g, problem, zero_tol)})
 
 
 def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, user_landmarks=None,
@@ -128,24 +127,20 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     (3, 'fps')
     """
     opts, method_kw = ShapeOptions.take(options, "landmarks", others=set(options))
-    check_method_options(method, method_kw)  # a misspelt option is refused, naming the method's options
     effort = check_choice(effort, "effort", EFFORTS)
     ids = parse_ids(user_landmarks, "user_landmarks")
     if method == "user":
         if not ids:
             raise InputError("method 'user' needs user_landmarks")
         method_kw["ids"] = ids
+    # a misspelt option is refused, naming the method's options, before any work
+    chosen, runtime = landmark_options(method, opts.seed, {**method_kw, "scores": scores, "effort": effort})
     k = check_int(k, "k", lo=0)
     shape = shape_of(x, n_points, ids, opts)
     guard_landmarks(shape, k, method, scores, opts.force)
     if opts.progress and method in ("cnbs", "cnbs-scale"):
-        method_kw.setdefault("progress", _cnbs_progress(k))
-    return _select(shape, k, method, opts.seed, scores, effort, method_kw)
-
-
-def _select(shape, k, method, seed, scores, effort, method_kw) -> LandmarkResult:
-    sel = select_landmarks(shape, k, method, seed=seed, scores=scores, effort=effort, **method_kw)
-    return promote(sel, LandmarkResult)
+        runtime.setdefault("progress", _cnbs_progress(k))
+    return promote(select_landmarks(shape, k, method, chosen, **runtime), LandmarkResult)
 
 
 def _cnbs_progress(k: int):
@@ -220,7 +215,7 @@ def kappa(x, n_points: int | None = None, *, landmarks=(), trials: int = 20, sca
     finally:
         if bar is not None:
             bar.close()
-    return promote(res, KappaResult, shape=shape, landmark_ids=tuple(ids), trials=trials)
+    return promote(res, KappaResult, {"shape": shape, "landmark_ids": tuple(ids), "trials": trials})
 
 
 def _bar(total: int, desc: str):

@@ -2,10 +2,19 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..checks import check_choice, check_flag, check_float
+from ..errors import InputError
 from ..symmetry.report import ScoreSettings
-from ..symmetry.score import check_exact
 from .options import EFFORTS
+
+
+def check_exact(exact):
+    """``exact`` if it is "auto", True or False (a numpy bool too); ``InputError`` otherwise."""
+    if isinstance(exact, (bool, np.bool_)) or (isinstance(exact, str) and exact == "auto"):
+        return exact
+    raise InputError(f"exact must be 'auto', True or False, got {exact!r}")
 
 
 def score_settings(*, exact="auto", upper=False, time_limit=None, effort="default", epsilon=None, seed=0,

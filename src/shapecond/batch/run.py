@@ -81,7 +81,7 @@ def _unreadable_row(spec, digest, params, reason) -> dict:
 
 @dataclass(frozen=True)
 class BatchRun:
-    """Where and how a batch runs (the keywords of ``run_batch`` after ``what``).
+    """Where and how a batch runs (``run_batch``).
 
     Attributes
     ----------
@@ -104,7 +104,7 @@ class BatchRun:
         return "overwrite" if self.overwrite else ("resume" if self.resume else "new")
 
 
-def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary:
+def run_batch(inputs, out, options=None, what=("score",), how: BatchRun = BatchRun()) -> BatchSummary:
     """Score every shape named by ``inputs`` into the table ``out`` (see module docstring).
 
     Parameters
@@ -118,10 +118,9 @@ def run_batch(inputs, out, options=None, what=("score",), **how) -> BatchSummary
         when matching, ``matcher``, ``landmark_table`` (a CSV file ``shape,label,vertex``) and
         ``both_directions``; ``pairs``: the pairs list of ``what`` ``match``.
     what : ``score``, ``local``, ``landmarks:K:METHOD``, ``match:TEMPLATE``, ``match`` (``rows.parse_what``).
-    **how : the fields of ``BatchRun`` (``n_jobs``, ``scheduler``, ``resume``, ``overwrite``, ``progress``).
+    how : BatchRun (``n_jobs``, ``scheduler``, ``resume``, ``overwrite``, ``progress``).
     """
     t0 = time.perf_counter()
-    how = BatchRun(**how)
     options = with_defaults({**(options or {}), "what": what})
     table_format(out)
     check_where(how.n_jobs, how.scheduler)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import click
 
 from ..batch import format_summary, run_batch
+from ..batch.run import BatchRun
 from ..errors import InputError
 from ..matching.pipeline import MATCHERS
 from .common import (Command, Float, OutputFile, emit_json, json_option, pop_shape_options, progress_enabled,
@@ -76,8 +77,9 @@ def command(inputs, out, what, as_json, **kw):
     if kw["pairs_file"] is not None and source == click.core.ParameterSource.DEFAULT:  # --pairs says what to do
         what = ("match",)
     options["epsilon"] = "collection" if kw["epsilon_collection"] else kw["epsilon"]
-    summary = run_batch(inputs, out, options, what=what, n_jobs=kw["jobs"], scheduler=kw["scheduler"],
-                        resume=kw["resume"], overwrite=kw["overwrite"], progress=progress_enabled())
+    how = BatchRun(n_jobs=kw["jobs"], scheduler=kw["scheduler"], resume=kw["resume"], overwrite=kw["overwrite"],
+                   progress=progress_enabled())
+    summary = run_batch(inputs, out, options, what=what, how=how)
     if as_json:
         emit_json(summary)
     else:

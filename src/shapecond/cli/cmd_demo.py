@@ -28,7 +28,8 @@ from .common import SEED, Command, Float, Int, emit_json, force_option, info, js
 
 def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
     from ..viz.heatmap import render_heatmap_png
-    from ..viz.render import render_png
+    from ..viz.render import Look, render_png
+    from ..viz.scene import HeatMapStyle, Place
     from ..viz.witness import render_witness_png
 
     from ..output import write_text
@@ -36,14 +37,14 @@ def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
 
     paths = {"witness": out / "witness.png", "heatmap": out / "heatmap.png", "landmarks": out / "landmarks.png",
              "html": out / "demo.html"}
-    render_witness_png(shape, score.witness, paths["witness"], up="y")
+    render_witness_png(shape, score.witness, paths["witness"], place=Place("y"))
     values = np.where(np.isfinite(heat.values), heat.values, np.nan)
     values = np.where(np.isnan(values), np.nanmax(values) if np.any(np.isfinite(values)) else 1.0, values)
-    render_heatmap_png(small, values, paths["heatmap"], up="y", cmap="turbo",
-                       title=f"sigma with each point fixed (before: {fmt(heat.sigma_before)})")
+    render_heatmap_png(small, values, paths["heatmap"],
+                       style=HeatMapStyle("y", title=f"sigma with each point fixed (before: {fmt(heat.sigma_before)})"))
     g = small.geometry
     render_png(paths["landmarks"], g.vertices, g.faces, None, [int(small.samples[i]) for i in chosen.sample_indices],
-               up="y", title="three CNBS landmarks (red)")
+               look=Look(up="y", title="three CNBS landmarks (red)"))
     write_text(paths["html"], demo_page(shape, score, small, values, chosen))  # the same scenes, to turn
     return {k: str(v) for k, v in paths.items()}
 

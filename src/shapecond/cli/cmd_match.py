@@ -153,7 +153,9 @@ def _surfaces_up_front(source, target, o: dict) -> tuple:
 
 def _write_doubt(result, path) -> None:
     from ..viz.ply import write_ply
+    from ..viz.scene import Colouring
 
     src = result.drawing[0]  # the doubt field in the source's internal vertex order, landmarks ringed
-    write_ply(path, src.vertices, src.faces, values=result.doubt[src.ids], landmarks=result.drawing[2], cmap="turbo")
+    write_ply(path, src.vertices, src.faces, values=result.doubt[src.ids], landmarks=result.drawing[2],
+              colouring=Colouring("turbo"))
     info(f"wrote {path}")

@@ -192,9 +192,10 @@ def local_symmetry_score(vertices, faces, landmarks=(), alpha: float = DEFAULT_A
                       result.landmarks, time.perf_counter() - t0, result.eigenvalues, result.modes)
 
 
-def local_score_of_geometry(geometry, landmark_ids=(), **kw) -> LocalScore:
+def local_score_of_geometry(geometry, landmark_ids=(), alpha: float = DEFAULT_ALPHA, energy: str = "springs",
+                            zero_tol: float = ZERO_TOL) -> LocalScore:
     """``local_symmetry_score`` of a ``Geometry`` with landmarks given as the file's vertex ids."""
     if not geometry.is_mesh:
         raise InputError(f"{geometry.name} is a point cloud; the local score needs a triangle mesh")
     fixed = geometry.to_internal(landmark_ids)
-    return local_symmetry_score(geometry.vertices, geometry.faces, fixed, ids=geometry.ids, **kw)
+    return local_symmetry_score(geometry.vertices, geometry.faces, fixed, alpha, energy, zero_tol, geometry.ids)

@@ -64,10 +64,10 @@ def sigma_lower_bound(D, n_samples, landmarks, seed=0, quick=False) -> float:
     At N = 400 only the lower bound with its witness is affordable (no exact solve,
     no LP); ``quick`` uses ``effort="quick"``.
     """
-    from ..symmetry.score import symmetry_score
+    from ..symmetry.score import ScoreOptions, symmetry_score
 
-    res = symmetry_score(D, n_samples, list(landmarks), exact=False, upper=False, seed=seed,
-                         effort="quick" if quick else "default")
+    res = symmetry_score(D, n_samples, list(landmarks),
+                         options=ScoreOptions(exact=False, upper=False, seed=seed, effort="quick" if quick else "default"))
     return float(res.sigma_lower)
 
 

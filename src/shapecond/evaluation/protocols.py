@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -46,7 +46,7 @@ from ..matching import refine
 from ..matching.candidates import recall
 from ..matching.metrics import errors_from_rows, normalise
 from ..matching.error_bar import dense_error_bar, sample_map_bar
-from ..matching.pipeline import (SAMPLE_MATCHERS, MatchOptions, match_landmarks_only, match_samples,
+from ..matching.pipeline import (SAMPLE_MATCHERS, MatchOptions, match_landmarks_only, match_samples, sample_matcher_options,
                                  match_surfaces, sample_sides)
 from ..matching.sampled import (CachedSolver, carry_samples, insert_landmarks, sample_surface, surface_at,
                                 surface_unit)
@@ -151,8 +151,8 @@ def _shared_order(cls, target_path, landmark_sets, setup, protocol, load) -> lis
 def _corresponding_cell(source, g, lm, matcher, solvers, seed, bars: bool = True):
     src, ls = insert_landmarks(source, lm, solvers[0])
     carried, truth = carry_samples(src, g, solvers[1], seed)
-    sm = match_samples(src.D, carried.D, ls, truth[ls], matcher, seed=seed,
-                       sides=sample_sides(src, ls, carried, truth[ls]))
+    options = replace(sample_matcher_options(matcher, seed), sides=sample_sides(src, ls, carried, truth[ls]))
+    sm = match_samples(src.D, carried.D, ls, truth[ls], options)
     raw = errors_from_rows(carried.rows[truth], carried.samples[sm.t])
     extra = {"exact": float(np.mean(sm.t == truth))}
     if bars:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import statistics
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InputError
@@ -255,19 +255,19 @@ def _matching_phase(plan: dict, landmarks: list, opts: EvaluationOptions):
     return records, {c: eps[c] for c in plan if c in eps}
 
 
-def evaluate_dataset(dataset_dir, options: EvaluationOptions | None = None, **kw) -> Evaluation:
+def evaluate_dataset(dataset_dir, options: EvaluationOptions = EvaluationOptions()) -> Evaluation:
     """Run the Figure 7 evaluation on every class folder of ``dataset_dir``.
 
     Parameters
     ----------
     dataset_dir : a folder of class folders (or one remeshed class folder).
-    options : EvaluationOptions; keyword arguments replace its fields.
+    options : EvaluationOptions (``evaluation_options`` makes one of ``sc.evaluate``'s keywords).
 
     Phases: the null shapes' geodesics; the landmark selections with the targets'
     geodesics (they depend only on the null shapes); the matchings with each
     class's own deformation level (shared vertex order only).
     """
-    opts = replace(options or EvaluationOptions(), **kw) if kw else (options or EvaluationOptions())
+    opts = options
     plan = plan_classes(dataset_dir, opts)
     _check_cost(plan, opts)
     timing, t0 = {}, time.perf_counter()
@@ -319,8 +319,9 @@ def _settings(dataset_dir, plan: dict, opts: EvaluationOptions, eps: dict, eps_h
     return s
 
 
-def evaluation_options(**kw) -> EvaluationOptions:
-    """``EvaluationOptions(**kw)`` with lists turned into tuples; unknown names refused in one line."""
+def evaluation_options(kw: dict) -> EvaluationOptions:
+    """``EvaluationOptions`` of the keywords ``kw`` of ``evaluate``, lists turned into tuples; unknown names
+    refused in one line."""
     known = set(EvaluationOptions.__dataclass_fields__)
     bad = sorted(set(kw) - known)
     if bad:
@@ -368,7 +369,7 @@ def evaluate(dataset_dir, **options) -> Evaluation:
     >>> len(ev.records), max(r.error for r in ev.records) < 1.0   # 2 targets x (3 and all landmarks)
     (4, True)
     """
-    return evaluate_dataset(Path(dataset_dir), evaluation_options(**options))
+    return evaluate_dataset(Path(dataset_dir), evaluation_options(options))
 
 
 __all__ = ["ClassPlan", "EvaluationOptions", "PROTOCOL_CHOICES", "evaluate", "evaluate_dataset",

@@ -44,7 +44,7 @@ remeshed classes the rule changed one of 40 all-landmark results, for the worse
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -55,8 +55,8 @@ from shapecond.matching.orientation import orientation_features
 from shapecond.matching.metrics import errors_from_rows, normalise
 from shapecond.matching.sampled import (CachedSolver, SampledSurface, carry_samples, insert_landmarks,
                                         sample_surface, surface_unit)
-from shapecond.matching.seeded import faq_match
-from shapecond.matching.spectral import SampleMatch, lh05_match
+from shapecond.matching.seeded import FAQOptions, faq_match
+from shapecond.matching.spectral import LH05Options, SampleMatch, lh05_match
 from shapecond.matching.zoomout import Anchors, ZoomOutOptions, anchor_width, nearest_rows, zoomout
 from shapecond.shapes.laplace import laplace_basis
 
@@ -85,7 +85,8 @@ class MatchOptions:
     samples : one of ``SAMPLINGS``.
     cache : read and write the on-disk cache.
     zoomout : options of the dense stage.
-    matcher_options : passed to the sample matcher (LH05: ``k``, ``rounding``, ``refine``...).
+    matcher_options : the sample matcher's options, ``LH05Options`` or ``FAQOptions`` (its ``seed`` is
+        the sample matcher's); None: ``sample_matcher_options(matcher, seed)``.
     """
 
     matcher: str = "lh05"
@@ -96,7 +97,7 @@ class MatchOptions:
     samples: str = "fps"
     cache: bool = True
     zoomout: ZoomOutOptions = ZoomOutOptions()
-    matcher_options: dict = field(default_factory=dict)
+    matcher_options: LH05Options | FAQOptions | None = None
 
     def __post_init__(self):
         for name, value, allowed in (("matcher", self.matcher, MATCHERS), ("dense", self.dense, DENSE_STAGES),
@@ -105,6 +106,14 @@ class MatchOptions:
                 raise InputError(f"unknown {name} {value!r} (choose from {', '.join(allowed)})")
         if self.matcher == "zoomout" and self.samples != "fps":
             raise InputError("the zoomout matcher uses no samples: samples 'same-ids' does not apply")
+        if self.matcher_options is None and self.matcher in SAMPLE_MATCHERS:
+            object.__setattr__(self, "matcher_options", sample_matcher_options(self.matcher, self.seed))
+
+    def sample_options(self, sides):
+        """The sample matcher's options with the side features ``sides`` of the samples (``sample_sides``)
+        unless they have their own."""
+        o = self.matcher_options
+        return o if o.sides is not None else replace(o, sides=sides)
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,14 +137,16 @@ class DenseMatch:
     info: dict = field(default_factory=dict)
 
 
-def match_samples(D_source, D_target, landmarks_source, landmarks_target, matcher: str = "lh05",
-                  seed: int = 0, **options) -> SampleMatch:
-    """Dispatch to ``lh05_match`` or ``faq_match`` (options passed through)."""
-    if matcher == "lh05":
-        return lh05_match(D_source, D_target, landmarks_source, landmarks_target, **options)
-    if matcher == "faq":
-        return faq_match(D_source, D_target, landmarks_source, landmarks_target, seed=seed, **options)
-    raise InputError(f"unknown sample matcher {matcher!r} ({' or '.join(SAMPLE_MATCHERS)})")
+def sample_matcher_options(matcher: str, seed: int = 0) -> LH05Options | FAQOptions:
+    """The default options of the sample matcher ``matcher`` ("lh05" or "faq"; FAQ's with ``seed``)."""
+    return LH05Options() if matcher == "lh05" else FAQOptions(seed=seed)
+
+
+def match_samples(D_source, D_target, landmarks_source, landmarks_target,
+                  options: LH05Options | FAQOptions = LH05Options()) -> SampleMatch:
+    """``lh05_match`` or ``faq_match``, as the type of ``options`` says."""
+    matcher = faq_match if isinstance(options, FAQOptions) else lh05_match
+    return matcher(D_source, D_target, landmarks_source, landmarks_target, options)
 
 
 def anchors_of(source: SampledSurface, target: SampledSurface, n_landmarks: int) -> Anchors:
@@ -166,9 +177,7 @@ def match_surfaces(source: SampledSurface, target: SampledSurface, landmarks_sou
     ls, lt = _landmark_pair(landmarks_source, landmarks_target)
     source, ils = insert_landmarks(source, ls, solvers[0])
     target, ilt = insert_landmarks(target, lt, solvers[1])
-    extra = dict(options.matcher_options)
-    extra.setdefault("sides", sample_sides(source, ils, target, ilt))
-    sm = match_samples(source.D, target.D, ils, ilt, options.matcher, seed=options.seed, **extra)
+    sm = match_samples(source.D, target.D, ils, ilt, options.sample_options(sample_sides(source, ils, target, ilt)))
     vmap = _extend(source, target, sm.t, ls.size, options)
     vmap[ls] = lt  # landmarks map exactly onto their images
     return DenseMatch(vmap, sm, source, target, dict(matcher=options.matcher, dense=options.dense,
@@ -288,9 +297,7 @@ def _match_same_ids(src: SampledSurface, target_geometry, ls, lt, options: Match
     tgt, truth = carry_samples(src, target_geometry, seed=options.seed)  # refuses different vertex ids
     if not np.array_equal(ls, lt):
         raise InputError("with same-ids samples the target landmarks must be the source's vertex ids")
-    extra = dict(options.matcher_options)
-    extra.setdefault("sides", sample_sides(src, ils, tgt, truth[ils]))
-    sm = match_samples(src.D, tgt.D, ils, truth[ils], options.matcher, seed=options.seed, **extra)
+    sm = match_samples(src.D, tgt.D, ils, truth[ils], options.sample_options(sample_sides(src, ils, tgt, truth[ils])))
     if options.dense in DENSE_METHODS:
         vmap = dense_map(src, tgt, sm.t, method=options.dense)
     else:  # the carried samples are shuffled: the landmark pairs are (src.samples[i], tgt.samples[truth[i]])

@@ -39,7 +39,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment, quadratic_assignment
 
-from shapecond._options import merge_options
 from shapecond.errors import InputError
 from shapecond.matching.candidates import check_distances, check_landmarks, descriptor_cost
 from shapecond.matching.nested import core_size, with_landmarks
@@ -106,7 +105,8 @@ def _objective_matrices(Ds, Dt, opts):
     return np.exp(-Ds ** 2 / (2 * s * s)), np.exp(-Dt ** 2 / (2 * s * s)), s
 
 
-def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(), options=None, **kw) -> SampleMatch:
+def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(),
+              options: FAQOptions = FAQOptions()) -> SampleMatch:
     """FAQ seeded graph matching, source to target (module docstring).
 
     Parameters
@@ -115,16 +115,15 @@ def faq_match(D_source, D_target, landmarks_source=(), landmarks_target=(), opti
         Sample distances of source and target, same units and same N.
     landmarks_source, landmarks_target : sequences of int
         Seeds (fixed pairs), sample indices.
-    options : FAQOptions, optional
-        ``objective``, ``init``, ``sigma``, ``maxiter``, ``seed``, ``nested``...; each of its
-        fields may also be given as a keyword argument (``seed=1``).
+    options : FAQOptions
+        ``objective``, ``init``, ``sigma``, ``maxiter``, ``seed``, ``nested``...
 
     Returns
     -------
     SampleMatch
         ``info["value"]`` is the objective of ``t``.
     """
-    opts = merge_options(FAQOptions, options, kw, "faq_match")
+    opts = options
     t0 = time.perf_counter()
     Ds, Dt = check_distances(D_source, D_target)
     if Ds.shape != Dt.shape:

@@ -75,7 +75,6 @@ from scipy.linalg.blas import ssymv
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse.linalg import LinearOperator, eigsh
 
-from shapecond._options import merge_options
 from shapecond.errors import InputError, TooLargeError
 from shapecond.matching import refine as R
 from shapecond.matching.candidates import Candidates, band_candidates, check_distances, k_best_candidates
@@ -380,7 +379,8 @@ class LH05Options:
             raise InputError(f"unknown rounding {self.rounding!r} (greedy or assignment)")
 
 
-def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), options=None, **kw) -> SampleMatch:
+def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(),
+               options: LH05Options = LH05Options()) -> SampleMatch:
     """Leordeanu–Hebert spectral matching with landmarks, source to target.
 
     Parameters
@@ -391,9 +391,8 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), opt
         Target sample distances, same units.
     landmarks_source, landmarks_target : sequences of int
         Corresponding landmark sample indices; they stay fixed.
-    options : LH05Options, optional
-        ``k``, ``sigma``, ``rounding``, ``refine``, ``rounds``, ``nested``...; each of its
-        fields may also be given as a keyword argument (``k=10``).
+    options : LH05Options
+        ``k``, ``sigma``, ``rounding``, ``refine``, ``rounds``, ``nested``...
 
     Returns
     -------
@@ -406,7 +405,7 @@ def lh05_match(D_source, D_target, landmarks_source=(), landmarks_target=(), opt
         of the map matched with the first three landmarks whenever that map sends
         the others to their images.
     """
-    opts = merge_options(LH05Options, options, kw, "lh05_match")
+    opts = options
     t0 = time.perf_counter()
     run = _LH05(*check_distances(D_source, D_target), opts)
     cand = k_best_candidates(run.Ds, run.Dt, landmarks_source, landmarks_target, opts.k, opts.quantile_weight,

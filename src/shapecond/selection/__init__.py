@@ -22,13 +22,12 @@ import math
 import time
 from dataclasses import dataclass, fields, replace
 
-from ..checks import check_float
 from ..errors import InputError
 from ..threads import single_blas_thread
 from .fps import fps_landmarks
 from .pls import pls_landmarks
 from .result import LandmarkSelection, make_result, sample_of_vertex
-from .user import user_landmarks
+from .user import UserLandmarks, user_landmarks
 
 # The score-based methods (cnbs, cnbs-scale, the scores after each landmark) need the compiled
 # witness search (numba), hks a Laplace-Beltrami basis and cnbs-local the deformation energy:
@@ -41,10 +40,11 @@ SCORES = ("sigma", "scale")
 
 @dataclass(frozen=True)
 class LandmarkOptions:
-    """The options of ``select_landmarks`` that every method takes.
+    """The options of ``select_landmarks``: those every method takes and the method's own.
 
     Attributes
     ----------
+    seed : seed of every random choice (FPS start, search starts).
     scores : compute the score after each landmark for the baselines (k witness searches);
         default True for "cnbs" (free: the heat map gives them), False otherwise.
     effort : effort of the witness searches ("quick", "default", "thorough").
@@ -53,34 +53,62 @@ class LandmarkOptions:
         for "cnbs-scale", "sigma" otherwise (cnbs always reports σ).
     epsilon : distortion level of the scale-aware score (default:
         ``symmetry.scale.default_epsilon``).
+    own : the method's own options, an instance of ``own_options_class(method)`` (None: its
+        defaults): ``cnbs.CNBSOptions`` for cnbs and cnbs-scale (their ``seed`` and ``effort``
+        are this object's), ``LocalLandmarkOptions``, ``hks.HKSOptions`` or ``user.UserLandmarks``.
     """
 
+    seed: int = 0
     scores: bool | None = None
     effort: str = "default"
     fixed: tuple = ()
     score: str | None = None
     epsilon: float | None = None
+    own: object = None
 
 
-#: Keyword options of ``select_landmarks`` itself, which every method takes.
-COMMON_OPTIONS = tuple(f.name for f in fields(LandmarkOptions))
+@dataclass(frozen=True)
+class LocalLandmarkOptions:
+    """The options of cnbs-local (``_local_landmarks``); None: the default of ``deformation``.
 
-#: The keyword options of the methods whose functions take them one by one (the keyword
-#: parameters of ``_local_landmarks``, ``hks.hks_landmarks`` and ``user.user_landmarks``).
-OWN_OPTIONS = {"cnbs-local": ("alpha", "energy", "refine"), "hks": ("time_fraction", "n_eigs"),
-               "user": ("ids", "path")}
+    Attributes
+    ----------
+    alpha, energy : of the local score's energy (``deformation.local_score.LocalProblem``).
+    refine : of ``deformation.heatmap.select_local_landmarks``.
+    """
+
+    alpha: float | None = None
+    energy: str | None = None
+    refine: bool | None = None
 
 
-def method_options(method: str) -> frozenset:
-    """The keyword options ``select_landmarks`` takes with ``method``: ``COMMON_OPTIONS`` and the
-    method's own (for cnbs the fields of ``CNBSOptions``, e.g. ``resolve_fraction``; for the
-    others ``OWN_OPTIONS``)."""
+#: Keyword options of ``select_landmarks`` that every method takes (``seed`` is the shape's, ``own`` the method's).
+COMMON_OPTIONS = tuple(f.name for f in fields(LandmarkOptions) if f.name not in ("seed", "own"))
+#: Keywords CNBS takes besides its options' fields: the witness search it starts from, a progress callback and
+#: a ``CNBSOptions`` whose fields the other keywords replace.
+CNBS_EXTRAS = ("base", "progress", "options")
+
+
+def own_options_class(method: str):
+    """The dataclass of ``method``'s own options (``LandmarkOptions.own``), or None (fps, pls)."""
     if method in ("cnbs", "cnbs-scale"):
         from .cnbs import CNBSOptions  # numba: see the note on imports above
 
-        extra = {f.name for f in fields(CNBSOptions)} - {"seed", "effort"} | {"progress", "base", "options"}
-    else:
-        extra = set(OWN_OPTIONS.get(method, ()))
+        return CNBSOptions
+    if method == "hks":
+        from .hks import HKSOptions  # a Laplace-Beltrami basis: see the note on imports above
+
+        return HKSOptions
+    return {"cnbs-local": LocalLandmarkOptions, "user": UserLandmarks}.get(method)
+
+
+def method_options(method: str) -> frozenset:
+    """The keyword options the interface takes with ``method``: ``COMMON_OPTIONS`` and the fields of
+    the method's own options (for cnbs less ``seed`` and ``effort``, plus ``CNBS_EXTRAS``)."""
+    cls = own_options_class(method)
+    extra = set() if cls is None else {f.name for f in fields(cls)}
+    if method in ("cnbs", "cnbs-scale"):
+        extra = extra - {"seed", "effort"} | set(CNBS_EXTRAS)
     return frozenset(extra | set(COMMON_OPTIONS))
 
 
@@ -93,8 +121,6 @@ def check_method_options(method: str, options) -> None:
     if unknown:
         raise InputError(f"landmark method {method!r} has no option {unknown[0]!r} "
                          f"(its options: {', '.join(sorted(method_options(method)))})")
-    if options.get("epsilon") is not None:  # every method takes it; a bad value is refused by all
-        check_float(options["epsilon"], "epsilon", lo=0.0)
 
 
 def monotone(values) -> list:
@@ -125,7 +151,7 @@ def prefix_scores(shape, sample_indices, fixed=(), seed: int = 0, effort: str = 
     return monotone(out)
 
 
-def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
+def _local_landmarks(shape, k, fixed, own: LocalLandmarkOptions):
     """CNBS on the local score via ``shapecond.deformation``.
 
     Landmarks are mesh vertices chosen by ``deformation.heatmap.select_local_landmarks``
@@ -138,27 +164,28 @@ def _local_landmarks(shape, k, fixed, alpha=None, energy=None, refine=None):
     g = shape.geometry
     if g is None or g.faces is None:
         raise InputError("cnbs-local needs a triangle mesh (the local score deforms a surface)")
-    kw = {key: v for key, v in (("alpha", alpha), ("energy", energy)) if v is not None}
+    kw = {key: v for key, v in (("alpha", own.alpha), ("energy", own.energy)) if v is not None}
     problem = LocalProblem(g.vertices, g.faces, **kw)
     start = [int(shape.samples[i]) for i in fixed]
-    res = select_local_landmarks(problem, k, start=start, **({"refine": refine} if refine is not None else {}))
+    res = select_local_landmarks(problem, k, start=start, **({"refine": own.refine} if own.refine is not None else {}))
     verts = [int(v) for v in res.landmarks]
     return verts, list(res.scores), float(res.initial)
 
 
-def _cnbs(shape, k, method, seed, common, score, kw):
+def _cnbs(shape, k, method, opts: LandmarkOptions, score, runtime):
     """CNBS on σ ("cnbs") or on δ(ε) ("cnbs-scale"): (samples, scores, initial score, heat maps,
-    what the scores are); scores None when σ is asked for after cnbs-scale."""
+    what the scores are); scores None when σ is asked for after cnbs-scale.  ``runtime``: (base, progress)."""
     from ..symmetry.scale import budget_of, default_epsilon  # numba: see the note on imports above
-    from .cnbs import cnbs_landmarks
+    from .cnbs import CNBSOptions, cnbs_landmarks
 
     n, D = int(shape.n_samples), shape.D
+    own = replace(opts.own or CNBSOptions(), seed=opts.seed, effort=opts.effort)
+    base, progress = runtime
     if method == "cnbs":
-        out = cnbs_landmarks(D, n, k, fixed=common.fixed, seed=seed, effort=common.effort, **kw)
+        out = cnbs_landmarks(D, n, k, opts.fixed, base, None, progress, own)
         return out["landmarks"], out["scores"], out["initial_score"], tuple(out["heat_maps"]), "sigma"
-    eps = default_epsilon(D, n) if common.epsilon is None else float(common.epsilon)
-    out = cnbs_landmarks(D, n, k, fixed=common.fixed, seed=seed, effort=common.effort,
-                         budget=budget_of(eps, n, D), **kw)
+    eps = default_epsilon(D, n) if opts.epsilon is None else float(opts.epsilon)
+    out = cnbs_landmarks(D, n, k, opts.fixed, base, budget_of(eps, n, D), progress, own)
     if score == "sigma":  # σ after each landmark (computed by the caller when asked for)
         return out["landmarks"], None, None, tuple(out["heat_maps"]), score
     # heat-map values are sqrt(d²): RMS displacement δ = value / sqrt(N)
@@ -167,23 +194,25 @@ def _cnbs(shape, k, method, seed, common, score, kw):
     return out["landmarks"], sc, initial, tuple(out["heat_maps"]), score
 
 
-def _baseline(shape, k, method, seed, fixed, kw) -> list:
+def _baseline(shape, k, method, opts: LandmarkOptions) -> list:
     """The samples chosen by fps, pls, hks or user."""
-    n = int(shape.n_samples)
+    n, seed, fixed = int(shape.n_samples), opts.seed, opts.fixed
     if method == "fps":
         return fps_landmarks(shape.D, n, k, seed=seed, fixed=fixed)
     if method == "pls":
         return pls_landmarks(shape.D, n, k, fixed=fixed)[0]
     if method == "hks":
-        from .hks import hks_landmarks  # a Laplace-Beltrami basis: see the note on imports above
+        from .hks import HKSOptions, hks_landmarks  # a Laplace-Beltrami basis: see the note on imports above
 
-        return hks_landmarks(shape, k, seed=seed, **kw)[0]
-    chosen = user_landmarks(shape, **kw)
+        return hks_landmarks(shape, k, seed, opts.own or HKSOptions())[0]
+    own = opts.own or UserLandmarks()
+    chosen = user_landmarks(shape, own.ids, own.path)
     return chosen[:k] if k else chosen
 
 
 @single_blas_thread
-def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, **kw) -> LandmarkSelection:
+def select_landmarks(shape, k: int, method: str = "cnbs", options: LandmarkOptions = LandmarkOptions(), *,
+                     base=None, progress=None) -> LandmarkSelection:
     """Choose ``k`` landmarks on ``shape`` with ``method``.
 
     Parameters
@@ -191,47 +220,39 @@ def select_landmarks(shape, k: int, method: str = "cnbs", seed: int = 0, **kw) -
     shape : MetricShape
     k : int, number of landmarks (for ``"user"``: at most the number given; 0 = all).
     method : one of ``METHODS``.
-    seed : int, for every random choice (FPS start, search starts).
-    **kw : the options every method takes (``LandmarkOptions``: ``scores``, ``effort``,
-        ``fixed``, ``score``, ``epsilon``) and the method's own: cnbs (the fields of
-        ``cnbs.CNBSOptions``: ``resolve_fraction``, ``resolve``, ``n_maps``, ``n_kicks``,
-        ``n_cross``, ``max_verify``, ``keep_heat_maps``..., and ``progress``), cnbs-local
-        (``alpha``, ``energy``, ``refine``), hks (``time_fraction``, ``n_eigs``), user
-        (``ids`` or ``path``).
+    options : LandmarkOptions (the seed, the options every method takes and the method's own),
+        taken as checked (the interface checks a user's: ``check_method_options``).
+    base : cnbs and cnbs-scale: the witness search with ``options.fixed`` fixed, when already known.
+    progress : cnbs and cnbs-scale: callable(step, done, total) or None.
 
     Returns
     -------
     LandmarkSelection
     """
-    check_method_options(method, kw)
-    kw = dict(kw)
-    common = LandmarkOptions(**{key: kw.pop(key) for key in COMMON_OPTIONS if key in kw})
-    if common.epsilon is not None:  # checked for every method, not only where it is used
-        common = replace(common, epsilon=check_float(common.epsilon, "epsilon", lo=0.0))
-    score = common.score or ("scale" if method == "cnbs-scale" else "sigma")
-    if score not in SCORES:
-        raise InputError(f"unknown score {score!r}; choose sigma or scale")
+    opts = options
+    score = opts.score or ("scale" if method == "cnbs-scale" else "sigma")
     n = int(shape.n_samples)
-    if method != "user" and not 1 <= k <= n - len(common.fixed) - 1:
-        raise InputError(f"k must lie between 1 and {n - len(common.fixed) - 1} for {n} samples, got {k}")
+    if method != "user" and not 1 <= k <= n - len(opts.fixed) - 1:
+        raise InputError(f"k must lie between 1 and {n - len(opts.fixed) - 1} for {n} samples, got {k}")
     t0 = time.perf_counter()
     if method == "cnbs-local":
-        verts, sc, initial = _local_landmarks(shape, k, common.fixed, **kw)
+        verts, sc, initial = _local_landmarks(shape, k, opts.fixed, opts.own or LocalLandmarkOptions())
         samples = [sample_of_vertex(shape, v) for v in verts]
         ids = [int(shape.geometry.ids[v]) for v in verts]
         return LandmarkSelection(tuple(ids), tuple(samples), tuple(verts), tuple(float(v) for v in sc), method,
                                  time.perf_counter() - t0, initial, shape=shape)
     initial, heat_maps, sc = None, (), None
     if method in ("cnbs", "cnbs-scale"):
-        chosen, sc, initial, heat_maps, score = _cnbs(shape, k, method, seed, common, score, kw)
+        chosen, sc, initial, heat_maps, score = _cnbs(shape, k, method, opts, score, (base, progress))
     else:
-        chosen = _baseline(shape, k, method, seed, common.fixed, kw)
+        chosen = _baseline(shape, k, method, opts)
     if sc is None:
-        want = common.scores if common.scores is not None else False
-        sc = (prefix_scores(shape, chosen, common.fixed, seed, common.effort, score, common.epsilon) if want
+        want = opts.scores if opts.scores is not None else False
+        sc = (prefix_scores(shape, chosen, opts.fixed, opts.seed, opts.effort, score, opts.epsilon) if want
               else [None] * len(chosen))
     return make_result(shape, chosen, sc, method, time.perf_counter() - t0, initial, heat_maps, score)
 
 
-__all__ = ["COMMON_OPTIONS", "LandmarkOptions", "LandmarkSelection", "METHODS", "OWN_OPTIONS", "SCORES",
-           "check_method_options", "method_options", "monotone", "prefix_scores", "select_landmarks"]
+__all__ = ["CNBS_EXTRAS", "COMMON_OPTIONS", "LandmarkOptions", "LandmarkSelection", "LocalLandmarkOptions", "METHODS",
+           "SCORES", "check_method_options", "method_options", "monotone", "own_options_class", "prefix_scores",
+           "select_landmarks"]

@@ -83,7 +83,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._options import merge_options
 from ..checks import check_landmark_count
 from ..errors import InputError
 from ..threads import single_blas_thread
@@ -265,8 +264,8 @@ def _maps_of(res, n_maps):
 
 
 @single_blas_thread
-def heat_map(D, n_samples=None, landmarks=(), base=None, budget=None, progress=None, options=None,
-             **kw) -> HeatMap:
+def heat_map(D, n_samples=None, landmarks=(), base=None, budget=None, progress=None,
+             options: HeatMapOptions = HeatMapOptions()) -> HeatMap:
     """The CNBS heat map: σ (lower bound) with each candidate sample fixed.
 
     Parameters
@@ -279,11 +278,10 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, budget=None, progress=N
         within the budget fixing each candidate (δ(ε) = value / sqrt(N)), and values
         within sqrt(N)·``scale.resolution`` of the smallest tie (module docstring).
     progress : callable(done, total) or None.
-    options : HeatMapOptions (seed, effort, warm maps, re-solves, verification, pruning);
-        each of its fields may also be given as a keyword argument (``seed=1``).
+    options : HeatMapOptions (seed, effort, warm maps, re-solves, verification, pruning).
     """
     t0 = time.perf_counter()
-    opts = merge_options(HeatMapOptions, options, kw, "heat_map")
+    opts = options
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
     n = D.shape[0] if n_samples is None else int(n_samples)
     L = [int(v) for v in landmarks]
@@ -489,15 +487,15 @@ def _next_base(D, n, L, c, hm, prev, budget, opts):
 
 
 @single_blas_thread
-def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=None, options=None, **kw):
+def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=None,
+                   options: CNBSOptions = CNBSOptions()):
     """Greedy CNBS: ``k`` landmarks, each the argmin of the current heat map.
 
     ``budget``: None for the paper's σ; a Dist² budget for the scale-aware score
     (``heat_map``), the ``cnbs-scale`` method.  ``base``: the ``witness_search``
     result with ``fixed`` fixed (and the same ``budget``), when already known.
     ``progress``: callable(step, done, total) or None.  ``options``: CNBSOptions (the
-    ``HeatMapOptions`` of every step, pruned by default, and ``keep_heat_maps``); each of
-    its fields may also be given as a keyword argument.
+    ``HeatMapOptions`` of every step, pruned by default, and ``keep_heat_maps``).
 
     Returns
     -------
@@ -505,7 +503,7 @@ def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=N
     after each), ``initial_score`` (σ with only ``fixed``), ``heat_maps`` (list of
     HeatMap when ``keep_heat_maps``), ``witness`` (final witness map).
     """
-    opts = merge_options(CNBSOptions, options, kw, "cnbs_landmarks")
+    opts = options
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
     n = D.shape[0] if n_samples is None else int(n_samples)
     L = check_landmark_count(k, n, fixed)

@@ -27,6 +27,7 @@ Choices (the paper leaves them open):
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -77,8 +78,22 @@ def _local_maxima(h, neighbourhood: sp.csr_matrix) -> np.ndarray:
     return peaks[np.argsort(-h[peaks], kind="stable")]
 
 
-def hks_landmarks(shape, k: int, time_fraction: float = 0.3, n_eigs: int = 30, seed: int = 0):
-    """``k`` sample indices at extremal points of the HKS, by decreasing value.
+@dataclass(frozen=True)
+class HKSOptions:
+    """The options of ``hks_landmarks``.
+
+    Attributes
+    ----------
+    time_fraction : the diffusion time of the signature, as a fraction of the spectrum's time range (``_time``).
+    n_eigs : eigenpairs of the Laplacian the signature is summed over.
+    """
+
+    time_fraction: float = 0.3
+    n_eigs: int = 30
+
+
+def hks_landmarks(shape, k: int, seed: int = 0, options: HKSOptions = HKSOptions()):
+    """``k`` sample indices at extremal points of the HKS, by decreasing value (FPS from ``seed`` fills up).
 
     Returns
     -------
@@ -86,6 +101,7 @@ def hks_landmarks(shape, k: int, time_fraction: float = 0.3, n_eigs: int = 30, s
         The landmarks and how many of them are HKS maxima (the rest filled by FPS).
     """
     n = int(shape.n_samples)
+    time_fraction, n_eigs = options.time_fraction, options.n_eigs
     if not 1 <= k <= n:
         raise InputError(f"cannot choose {k} landmarks among {n} samples")
     if not 0.0 <= time_fraction <= 1.0:

@@ -11,9 +11,20 @@ samples are an error: two landmarks would collapse into one.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from ..checks import check_ids, read_ids
 from ..errors import InputError
 from .result import sample_of_vertex
+
+
+@dataclass(frozen=True)
+class UserLandmarks:
+    """The user's landmarks as ``select_landmarks`` takes them (method "user"): ``ids`` (input ids) or,
+    when None, the landmark file ``path`` (``user_landmarks``)."""
+
+    ids: tuple | None = None
+    path: str | None = None
 
 
 def user_landmarks(shape, ids=None, path=None) -> list[int]:

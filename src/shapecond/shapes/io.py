@@ -59,7 +59,7 @@ def load_input(spec, largest_component: bool = False, force: bool = False):
         from .synthetic import generate
 
         name, params = parse_demo_spec(spec)
-        return generate(name, force=force, **params)
+        return generate(name, params, force=force)
     path = Path(spec)
     if path.suffix.lower() == ".npz":
         return load_sample_archive(path, force)

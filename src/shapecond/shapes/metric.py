@@ -131,8 +131,8 @@ class Sampling:
         object.__setattr__(self, "seed", check_seed(self.seed))
 
 
-def build_metric_shape(geometry: Geometry, n_points: int = 400, landmarks=(), sampling: Sampling | None = None,
-                       **options) -> MetricShape:
+def build_metric_shape(geometry: Geometry, n_points: int = 400, landmarks=(),
+                       sampling: Sampling = Sampling()) -> MetricShape:
     """Sample a mesh or point cloud into a ``MetricShape`` (landmarks first, FPS order).
 
     Parameters
@@ -141,10 +141,10 @@ def build_metric_shape(geometry: Geometry, n_points: int = 400, landmarks=(), sa
         symmetry-consistent (X and Y closed under the map).
     n_points : N, the number of samples.
     landmarks : internal vertex indices placed first.
-    sampling : a ``Sampling``, or None to make one of ``**options`` (its fields: ``metric``,
-        ``backend``, ``seed``, ``target``, ``target_factor``, ``cache``, ``progress``, ``force``).
+    sampling : how (``Sampling``: ``metric``, ``backend``, ``seed``, ``target``, ``target_factor``,
+        ``cache``, ``progress``, ``force``).
     """
-    s = sampling if sampling is not None else Sampling(**options)
+    s = sampling
     n_points = check_int(n_points, "n_points", lo=3)
     if n_points > geometry.n_vertices:
         raise InputError(f"{geometry.name} has {geometry.n_vertices} vertices, fewer than the "

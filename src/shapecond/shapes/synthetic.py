@@ -238,18 +238,18 @@ def _vertex_estimate(name: str, p: dict) -> int:
     return int(6000 * (0.03 / p.get("resolution", 0.03)) ** 2)
 
 
-def generate(name: str, force: bool = False, **params) -> Geometry:
+def generate(name: str, params: dict | None = None, force: bool = False) -> Geometry:
     """Build a generated shape by name (``demo:NAME`` on the command line).
 
-    Parameter values may be numbers or strings (from ``demo:NAME:key=value``);
-    each is checked against ``PARAMETERS``.  Shapes with more than
+    ``params``: the shape's parameters by name (None: its defaults); values may be numbers or
+    strings (from ``demo:NAME:key=value``), each checked against ``PARAMETERS``.  Shapes with more than
     ``MAX_GENERATED_VERTICES`` vertices are refused unless ``force``.
     """
     if name not in GENERATORS:
         raise InputError(f"unknown generated shape {name!r}; choose from {', '.join(sorted(GENERATORS))}")
     spec = PARAMETERS[name]
     values = {}
-    for key, value in params.items():
+    for key, value in (params or {}).items():
         if key not in spec:
             raise InputError(f"demo:{name} has no parameter {key!r} (parameters: {', '.join(spec)})")
         kind, bounds = spec[key]

@@ -29,9 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from shapecond._options import merge_options
 from shapecond.jsonable import jsonable
-from shapecond.errors import InputError, TooLargeError
+from shapecond.errors import TooLargeError
 from shapecond.limits import SOLVE_SECONDS, Deadline, check_cost, search_seconds
 from shapecond.symmetry.exact import exact_sigma, map_count
 from shapecond.symmetry.resolution import coarse_to_fine, two_levels
@@ -118,15 +117,8 @@ class SymmetryScore:
         })
 
 
-def check_exact(exact):
-    """``exact`` if it is "auto", True or False (a numpy bool too); ``InputError`` otherwise."""
-    if isinstance(exact, (bool, np.bool_)) or (isinstance(exact, str) and exact == "auto"):
-        return exact
-    raise InputError(f"exact must be 'auto', True or False, got {exact!r}")
-
-
 def _exact_wanted(exact, n, m, n_landmarks) -> bool:
-    if check_exact(exact) == "auto":
+    if isinstance(exact, str) and exact == "auto":
         return map_count(n, m, n_landmarks) <= AUTO_EXACT_MAPS
     return bool(exact)
 
@@ -157,7 +149,7 @@ class ScoreOptions:
     force: bool = False
 
 
-def symmetry_score(D, n_samples=None, landmarks=(), search=None, options=None, **kw) -> SymmetryScore:
+def symmetry_score(D, n_samples=None, landmarks=(), search=None, options: ScoreOptions = ScoreOptions()) -> SymmetryScore:
     """Bracket of the global symmetry score σ(X) (Eq. 5) and of κ (Theorem 4.1).
 
     Parameters
@@ -168,7 +160,7 @@ def symmetry_score(D, n_samples=None, landmarks=(), search=None, options=None, *
     search : a ``witness_search`` result for the same D, N, landmarks and seed, to
         reuse instead of searching again (``api.SymmetryProblem`` keeps them).
     options : ScoreOptions (``exact``, ``upper``, ``time_limit``, ``seed``, ``effort``,
-        ``force``); each of its fields may also be given as a keyword argument.
+        ``force``), taken as checked (``api.settings.score_settings`` checks a user's).
 
     With many dense targets (``resolution.two_levels``: N = 400, M = 3,200) the
     search runs over the first M/2 targets and its maps are then refined over
@@ -176,7 +168,7 @@ def symmetry_score(D, n_samples=None, landmarks=(), search=None, options=None, *
     shapes for a fraction of the time, and the lower level is kept (``coarse``)
     for the resolution report.
     """
-    opts = merge_options(ScoreOptions, options, kw, "symmetry_score")
+    opts = options
     t0 = time.perf_counter()
     clock = Deadline(opts.time_limit)
     D, n, lm, _ = prepare_instance(D, n_samples, landmarks)

@@ -18,10 +18,11 @@ from __future__ import annotations
 
 from .ply import write_ply
 from .render import render_scene
-from .scene import heatmap_scene, shape_points
+from .scene import HeatMapStyle, heatmap_scene, shape_points
 
 
-def render_heatmap_png(shape, values, path, *, landmarks=(), ply: str | None = None, fig=None, **style):
+def render_heatmap_png(shape, values, path, *, landmarks=(), ply: str | None = None, fig=None,
+                       style: HeatMapStyle = HeatMapStyle()):
     """Draw a per-sample heat map on the shape (Figure 1/4 style), optionally also as PLY.
 
     Parameters
@@ -37,13 +38,10 @@ def render_heatmap_png(shape, values, path, *, landmarks=(), ply: str | None = N
         Also write a PLY with the interpolated colours there.
     fig : matplotlib Figure or None
         Draw onto it; with ``path=None`` the Figure is returned (no PNG written).
-    **style : ``up`` (None guesses it, ``scene.guess_up``), ``views``, ``title``, ``method`` ("smooth" or
-        "nearest" interpolation), ``cmap`` (default "turbo"), ``colorbar_label``, and ``log``:
-        colour by log10 of the values; None: when max/min > 20 (e.g. points near a mirror plane
-        keep huge scores and would flatten the rest of the scale).  Infinite values are drawn
-        with the largest finite one.
+    style : HeatMapStyle (``up``, ``views``, ``title``, the interpolation ``method``, ``cmap``,
+        ``colorbar_label`` and ``log``).
     """
-    scene = heatmap_scene(shape, values, landmarks=landmarks, **style)
+    scene = heatmap_scene(shape, values, landmarks=landmarks, style=style)
     out = render_scene(path, scene, fig=fig)
     if ply is not None:
         layer = scene.layers[0]  # the PNG's colours, in the input's coordinates

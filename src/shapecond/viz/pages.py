@@ -28,8 +28,8 @@ from ..errors import InputError
 from ..jsonable import fmt
 from .html import MAX_DISPLAY_VERTICES, page, summary, table, viewer
 from .truth import truth_map
-from .scene import (DEFAULT_VIEWS, colour_layer, guess_up, heatmap_scene, landmark_scene, make_scene,
-                    position_colours, witness_scene)
+from .scene import (DEFAULT_VIEWS, Colouring, HeatMapStyle, Place, colour_layer, guess_up, heatmap_scene,
+                    landmark_scene, make_scene, position_colours, witness_scene)
 
 
 def _name(shape) -> str:
@@ -44,7 +44,7 @@ def score_page(result, title: str | None = None) -> str:
         note = "a distance matrix has no surface: its points are placed by classical MDS"
     else:
         note = None
-    scene = witness_scene(shape, sc.witness, landmarks=tuple(sc.landmarks), title=title)
+    scene = witness_scene(shape, sc.witness, landmarks=tuple(sc.landmarks), place=Place(up=None, title=title))
     layers = list(scene.layers)
     if result.scale is not None:
         wide = witness_scene(shape, result.scale.witness, landmarks=tuple(sc.landmarks)).layers[1]
@@ -65,11 +65,10 @@ def score_page(result, title: str | None = None) -> str:
     return page(f"shapecond score: the witness map of {_name(shape)}", body)
 
 
-def heatmap_page(shape, values, *, landmarks=(), up=None, title=None, lines=(), cmap="turbo",
-                 colorbar_label="σ with the point fixed") -> str:
-    """Page of a heat map: ``values`` per sample (as ``render_heatmap_png``), ``lines`` of summary."""
-    scene = heatmap_scene(shape, values, landmarks=landmarks, up=up, title=title, cmap=cmap,
-                          colorbar_label=colorbar_label)
+def heatmap_page(shape, values, *, landmarks=(), lines=(), style: HeatMapStyle = HeatMapStyle()) -> str:
+    """Page of a heat map: ``values`` per sample drawn with ``style`` (as ``render_heatmap_png``), ``lines``
+    of summary."""
+    scene = heatmap_scene(shape, values, landmarks=landmarks, style=style)
     body = [summary(lines) if lines else "", viewer(scene),
             "<p>Low values are good landmarks: fixing that point breaks the near-symmetries. Values are "
             "computed at the samples and interpolated between them (hover shows the interpolated value).</p>"]
@@ -84,8 +83,8 @@ def landmarks_page(shape, result, *, up=None, title=None) -> str:
     verts = list(result.vertices) if shape.geometry is not None else [int(pts[i]) for i in result.sample_indices]
     name = "δ(ε)" if result.score == "scale" else "σ"
     notes = [f"{name} after: {fmt(s)}" for s in result.scores] if result.scores else ()
-    scene = landmark_scene(V, F, verts, ids=ids, up=up or guess_up(shape.geometry), title=title, notes=notes,
-                           label=f"{result.method} landmarks")
+    scene = landmark_scene(V, F, verts, notes=notes, label=f"{result.method} landmarks", ids=ids,
+                           place=Place(up or guess_up(shape.geometry), title=title))
     rows = [(i + 1, v, fmt(s) if i < len(result.scores) else "-")
             for i, (v, s) in enumerate(zip(result.landmarks, list(result.scores) + [None] * len(result.landmarks)))]
     body = [summary([f"method {result.method}, {shape.n_samples} samples, {result.seconds:.2f} s",
@@ -99,11 +98,11 @@ def local_page(geometry, heatmap, fixed=(), *, result=None, title=None) -> str:
     vals = np.asarray(heatmap.values, dtype=float)
     finite = vals[np.isfinite(vals)]
     top = float(finite.max()) if finite.size else 1.0
-    layer = colour_layer(np.where(np.isfinite(vals), vals, top), len(vals), "viridis", hover=vals,
-                         colorbar_label="σ_inf with the vertex fixed", value_name="σ_inf with the vertex fixed",
-                         landmarks=[int(v) for v in fixed], label="doubt field")
-    scene = make_scene(geometry.vertices, geometry.faces, [layer], up=guess_up(geometry), ids=geometry.ids,
-                       title=title)
+    label = "σ_inf with the vertex fixed"
+    layer = replace(colour_layer(np.where(np.isfinite(vals), vals, top), len(vals), Colouring("viridis", label=label),
+                                 hover=vals), value_name=label, landmarks=[int(v) for v in fixed], label="doubt field")
+    scene = make_scene(geometry.vertices, geometry.faces, [layer], ids=geometry.ids,
+                       place=Place(guess_up(geometry), title=title))
     lines = [] if result is None else [f"local score σ_inf {fmt(result.score)}, λ_min {fmt(result.lambda_min)}",
                                        f"zero modes: {', '.join(result.zero_modes) or 'none'}"]
     body = [summary(lines) if lines else "", viewer(scene),
@@ -209,18 +208,18 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
     marks = [int(v) for v in lms] + [n_s + int(v) for v in lmt]
     ranks = tuple(range(len(lms))) * 2
     seg = np.stack([a[list(lms)], b[list(lmt)]], axis=1) if len(lms) else None
-    layers = [colour_layer(colours, len(colours), landmarks=marks, ranks=ranks, segments=seg,
-                           label="colour transfer source → target")]
+    layers = [replace(colour_layer(colours, len(colours)), landmarks=marks, ranks=ranks, segments=seg,
+                      label="colour transfer source → target")]
     notes = []
     truth = fields.truth
     if truth is not None:
         field, err, samples = match_errors(src, tgt, vmap, truth)
         top = float(err.max()) if err.size else 1.0
         full = np.concatenate([field, np.full(tgt.n_vertices, np.nan)])
-        lay = colour_layer(np.where(np.isfinite(full), full, 0.0), len(full), "magma_r", 0.0, top or 1.0,
-                           hover=full, value_name="error, % of half the target's diameter",
-                           colorbar_label="error, % of half the target's diameter", landmarks=marks, ranks=ranks,
-                           segments=seg, label="error field (on the source)")
+        name = "error, % of half the target's diameter"
+        lay = replace(colour_layer(np.where(np.isfinite(full), full, 0.0), len(full),
+                                   Colouring("magma_r", 0.0, top or 1.0, name), hover=full),
+                      value_name=name, landmarks=marks, ranks=ranks, segments=seg, label="error field (on the source)")
         lay.rgba[n_s:] = (0.75, 0.75, 0.75, 1.0)
         layers.append(lay)
         notes.append(f"error field: geodesic distance on the target between the matched and the true vertex, "
@@ -229,9 +228,10 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
     if fields.doubt is not None:
         full = np.concatenate([np.asarray(fields.doubt, float), np.full(tgt.n_vertices, np.nan)])
         top = float(np.nanmax(full)) if np.any(np.isfinite(full)) else 0.0
-        lay = colour_layer(np.where(np.isfinite(full), full, 0.0), len(full), "turbo", 0.0, top or 1.0, hover=full,
-                           value_name="doubt, sqrt(area)", colorbar_label="error bar's doubt, sqrt(area)",
-                           landmarks=marks, ranks=ranks, segments=seg, label="error bar's doubt (on the source)")
+        lay = replace(colour_layer(np.where(np.isfinite(full), full, 0.0), len(full),
+                                   Colouring("turbo", 0.0, top or 1.0, "error bar's doubt, sqrt(area)"), hover=full),
+                      value_name="doubt, sqrt(area)", landmarks=marks, ranks=ranks, segments=seg,
+                      label="error bar's doubt (on the source)")
         lay.rgba[n_s:] = (0.75, 0.75, 0.75, 1.0)
         layers.append(lay)
         notes.append("doubt: how far the widest map that fits the landmarks and distorts no more than this one "
@@ -297,8 +297,8 @@ def match_page(src, tgt, vmap, landmarks_source=(), landmarks_target=(), *, fiel
     elif src.faces is not None or tgt.faces is not None:
         raise InputError("draw two meshes or two point clouds, not one of each")
     n_s = src.n_vertices
-    scene = make_scene(np.vstack([a, b]), F, layers, up=None, ids=np.concatenate([src.ids, tgt.ids]), title=title,
-                       notes=notes)
+    scene = make_scene(np.vstack([a, b]), F, layers, ids=np.concatenate([src.ids, tgt.ids]),
+                       place=Place(None, title=title, notes=tuple(notes)))
     scene = replace(scene, parts=(("source", 0, n_s), ("target", n_s, n_s + tgt.n_vertices)),
                     partner=np.concatenate([np.where(vmap >= 0, vmap + n_s, -1), np.full(tgt.n_vertices, -1)]),
                     suggestions=suggestions, picking=picking)
@@ -369,8 +369,8 @@ def class_scene(geometry, sets: dict, scores: dict, cls: str):
         sc = scores.get(method, {})
         notes = tuple(f"σ after {i + 1}: {fmt(sc[i + 1])}" if (i + 1) in sc else "" for i in range(len(verts)))
         layers.append(dict(values=None, landmarks=list(verts), notes=notes, label=method))
-    return make_scene(geometry.vertices, geometry.faces, layers, up=guess_up(geometry), ids=geometry.ids,
-                      views=DEFAULT_VIEWS, title=f"{cls}: null shape with each method's landmarks")
+    return make_scene(geometry.vertices, geometry.faces, layers, ids=geometry.ids,
+                      place=Place(guess_up(geometry), DEFAULT_VIEWS, f"{cls}: null shape with each method's landmarks"))
 
 
 def evaluation_page(ev, folder, text: str, nulls: dict, max_vertices: int = 15_000) -> str:
@@ -396,12 +396,12 @@ def evaluation_page(ev, folder, text: str, nulls: dict, max_vertices: int = 15_0
 
 def demo_page(shape, score, small, values, chosen) -> str:
     """``demo.html`` of ``shapecond demo``: the witness map, the heat map and the CNBS landmarks."""
-    witness = witness_scene(shape, score.witness, up="y", title="the witness map of the symmetry score")
-    heat = heatmap_scene(small, values, up="y", title="σ with each point fixed (CNBS heat map)")
+    witness = witness_scene(shape, score.witness, place=Place("y", title="the witness map of the symmetry score"))
+    heat = heatmap_scene(small, values, style=HeatMapStyle("y", title="σ with each point fixed (CNBS heat map)"))
     g = small.geometry
     notes = [f"σ after: {fmt(s)}" for s in chosen.scores]
-    marks = landmark_scene(g.vertices, g.faces, [int(small.samples[i]) for i in chosen.sample_indices], ids=g.ids,
-                           up="y", title="three CNBS landmarks", notes=notes)
+    marks = landmark_scene(g.vertices, g.faces, [int(small.samples[i]) for i in chosen.sample_indices], notes=notes,
+                           ids=g.ids, place=Place("y", title="three CNBS landmarks"))
     lo, hi = score.sigma_lower, score.sigma_upper
     body = [summary([f"sigma [{fmt(lo)}, {fmt(hi)}] on demo:animal ({g.n_vertices} vertices, N = {shape.n_points})",
                      f"CNBS landmarks (N = {small.n_points}): {', '.join(map(str, chosen.landmarks))}"]),
@@ -412,38 +412,73 @@ def demo_page(shape, score, small, values, chosen) -> str:
 
 # --- results of the Python interface ------------------------------------------------------------
 
-#: For each result type: the options its ``to_html`` takes (``result_page``'s keywords), passed on to
-#: its page function (a match's page takes ``truth``, ``suggestions``, ``command`` and ``up`` itself).
+@dataclass(frozen=True)
+class PageOptions:
+    """The options of a result's page (``result_page``; ``PAGE_OPTIONS`` says which each result type takes).
+
+    Attributes
+    ----------
+    title : the page's title.
+    up : the shapes' vertical direction (None: guessed, ``scene.guess_up``).
+    cmap, colorbar_label : a heat map's colours (None: ``scene.HeatMapStyle``'s).
+    truth, suggestions, command : a match's ground truth, suggested landmarks and command paths
+        (``MatchFields``).
+    """
+
+    title: str | None = None
+    up: str | None = None
+    cmap: str | None = None
+    colorbar_label: str | None = None
+    truth: object = None
+    suggestions: tuple = ()
+    command: object = None
+
+
+#: For each result type: the ``PageOptions`` its ``to_html`` takes.
 PAGE_OPTIONS = {"ScoreResult": ("title",), "HeatMapResult": ("up", "title", "cmap", "colorbar_label"),
                 "LandmarkResult": ("up", "title"), "MatchResult": ("truth", "suggestions", "command", "up", "title"),
                 "LocalResult": ("title",)}
 
 
-def result_page(result, **kw) -> str:
-    """The page of a result of ``shapecond``'s functions (score, heatmap, landmarks, match, local_score)."""
+def page_options(result, options: dict) -> PageOptions:
+    """The ``PageOptions`` of ``to_html``'s keywords ``options`` for ``result``; an option its page does not
+    take is refused in one line, before anything is drawn."""
     kind = type(result).__name__
     if kind not in PAGE_OPTIONS:
         raise InputError(f"no HTML page for a {kind}")
-    unknown = sorted(set(kw) - set(PAGE_OPTIONS[kind]))
-    if unknown:  # one line, before anything is drawn
+    unknown = sorted(set(options) - set(PAGE_OPTIONS[kind]))
+    if unknown:
         raise InputError(f"to_html() got an unknown option {unknown[0]!r} "
                          f"(its options: {', '.join(PAGE_OPTIONS[kind])})")
+    return PageOptions(**options)
+
+
+def result_page(result, options: PageOptions = PageOptions()) -> str:
+    """The page of a result of ``shapecond``'s functions (score, heatmap, landmarks, match, local_score);
+    ``options`` as ``page_options`` makes them."""
+    kind, o = type(result).__name__, options
+    if kind not in PAGE_OPTIONS:
+        raise InputError(f"no HTML page for a {kind}")
     if kind == "ScoreResult":
-        return score_page(result, **kw)
+        return score_page(result, o.title)
     if kind == "HeatMapResult":
+        style = HeatMapStyle(o.up, title=o.title, cmap=o.cmap or HeatMapStyle.cmap,
+                             colorbar_label=o.colorbar_label or HeatMapStyle.colorbar_label)
         return heatmap_page(result.shape, result.plot_values(), landmarks=range(len(result.landmarks)),
                             lines=[f"{result.score} before: {fmt(result.sigma_before)}; best landmark: vertex "
-                                   f"{result.best} ({fmt(result.best_value)})"], **kw)
+                                   f"{result.best} ({fmt(result.best_value)})"], style=style)
     if kind == "LandmarkResult":
         if getattr(result, "shape", None) is None:
             raise InputError("this LandmarkResult does not know its shape; use shapecond.landmarks()")
-        return landmarks_page(result.shape, result, **kw)
+        return landmarks_page(result.shape, result, up=o.up, title=o.title)
     if kind == "MatchResult":
-        return _match_result_page(result, **kw)
-    return _local_result_page(result, **kw)
+        return _match_result_page(result, o)
+    hm = result.doubt()  # InputError when the result does not know its mesh
+    g = result.drawing[0]
+    return local_page(g, hm, g.to_internal(result.landmarks), result=result, title=o.title)
 
 
-def _match_result_page(result, truth=None, suggestions=(), command=None, up=None, **kw) -> str:
+def _match_result_page(result, o: PageOptions) -> str:
     drawing = getattr(result, "drawing", None)
     if drawing is None:
         raise InputError("a map between distance matrices has no surface to draw")
@@ -451,28 +486,23 @@ def _match_result_page(result, truth=None, suggestions=(), command=None, up=None
     vmap = np.full(src.n_vertices, -1, dtype=np.int64)
     ok = result.map[src.ids] >= 0
     vmap[ok] = tgt.to_internal(result.map[src.ids][ok])
-    t = None if truth is None else truth_map(truth, src, tgt)
+    t = None if o.truth is None else truth_map(o.truth, src, tgt)
     s = result.summary
     lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
     doubt = None if result.doubt is None else result.doubt[src.ids]
+    suggestions = o.suggestions
     if not suggestions and s.get("suggestions"):  # the match's own (``MatchResult.suggest``)
         suggestions = tuple((int(src.to_internal([p["source_id"]])[0]),
                              f"image {p['image_id']}, bar after it {p['bar_after']:.3g}") for p in s["suggestions"])
-    fields = MatchFields(t, doubt, s.get("error_bar", {}).get("text", ""), tuple(suggestions), command, up)
-    return match_page(src, tgt, vmap, ls, lt, fields=fields, lines=lines, **kw)
+    fields = MatchFields(t, doubt, s.get("error_bar", {}).get("text", ""), tuple(suggestions), o.command, o.up)
+    return match_page(src, tgt, vmap, ls, lt, fields=fields, lines=lines, title=o.title)
 
 
-def _local_result_page(result, **kw) -> str:
-    hm = result.doubt()  # InputError when the result does not know its mesh
-    g = result.drawing[0]
-    return local_page(g, hm, g.to_internal(result.landmarks), result=result, **kw)
-
-
-def write_result(result, path, **kw) -> str:
-    """Write ``result_page(result)`` to ``path`` atomically; return the path."""
+def write_result(result, path, options: PageOptions = PageOptions()) -> str:
+    """Write ``result_page(result, options)`` to ``path`` atomically; return the path."""
     from ..output import write_text
 
-    return str(write_text(path, result_page(result, **kw)))
+    return str(write_text(path, result_page(result, options)))
 
 
 def inline_result(result, height: int = 640):

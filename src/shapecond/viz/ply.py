@@ -14,17 +14,18 @@ import numpy as np
 import trimesh
 
 from ..errors import InputError
-from .scene import colour_layer, landmark_colour
+from .scene import Colouring, colour_layer, landmark_colour
 
 
-def scalar_colours(values, cmap: str = "viridis", vmin=None, vmax=None) -> np.ndarray:
+def scalar_colours(values, colouring: Colouring = Colouring()) -> np.ndarray:
     """Map scalars (n,) to uint8 RGBA colours (n, 4); non-finite values get the top colour."""
     v = np.asarray(values, dtype=float).ravel()
-    rgba = colour_layer(v, v.size, cmap, vmin, vmax).rgba
+    rgba = colour_layer(v, v.size, colouring).rgba
     return np.round(rgba * 255).astype(np.uint8)
 
 
-def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, ring: bool = True, **colouring) -> str:
+def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, ring: bool = True,
+              colouring: Colouring = Colouring()) -> str:
     """Write a PLY with per-vertex colours.
 
     Parameters
@@ -38,7 +39,7 @@ def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, ring: bo
         Internal vertex indices in order; painted red (first three) and green (rest).
     ring : bool
         Also paint the landmarks' neighbouring vertices (meshes only).
-    **colouring : ``cmap`` (default "viridis"), ``vmin``, ``vmax`` of scalar values.
+    colouring : scene.Colouring of scalar values (``cmap``, default "viridis", ``vmin``, ``vmax``).
 
     Returns
     -------
@@ -56,7 +57,7 @@ def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, ring: bo
         if v.ndim == 1:
             if v.shape[0] != n:
                 raise InputError(f"values must have {n} entries, got {v.shape[0]}")
-            colours = scalar_colours(v, colouring.get("cmap", "viridis"), colouring.get("vmin"), colouring.get("vmax"))
+            colours = scalar_colours(v, colouring)
         elif v.ndim == 2 and v.shape[0] == n and v.shape[1] in (3, 4):
             c = v.astype(float)
             if v.dtype.kind == "f":

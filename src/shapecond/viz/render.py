@@ -31,7 +31,8 @@ from matplotlib.figure import Figure
 
 from ..errors import InputError
 from ..output import atomic_open
-from .scene import AMBIENT, DEFAULT_VIEWS, DIFFUSE, FACING, Scene, landmark_colour, make_scene, view_label
+from .scene import (AMBIENT, DEFAULT_VIEWS, DIFFUSE, FACING, Colouring, Place, Scene, landmark_colour, make_scene,
+                    view_label)
 
 __all__ = ["draw_rows", "draw_scene", "new_figure", "render_png", "render_rows", "render_scene", "save_figure",
            "view_rotation"]
@@ -104,7 +105,7 @@ def _draw_view(ax, scene: Scene, layer, R, fnormals, labels):
 
 @dataclass(frozen=True)
 class Look:
-    """How a picture of a shape is framed and drawn (every keyword of ``render_png`` but the colouring).
+    """How a picture of a shape is framed, coloured and drawn (``render_png``, ``render_rows``).
 
     Attributes
     ----------
@@ -116,6 +117,11 @@ class Look:
     point_size : marker size of a point cloud.
     labels : number the landmarks.
     dpi : resolution of the PNG.
+    colouring : how ``render_png``'s scalar values are coloured (``scene.Colouring``: ``cmap``, default
+        "viridis", ``vmin``, ``vmax`` and the colour bar's ``label``); ``render_rows``' rows colour themselves.
+    extra : ``render_png``: ``extra(ax, project)`` is called for every view after the shape is drawn, with
+        ``project(points (k, 3)) -> (k, 3)`` taking points in the input's coordinates to screen x, screen y
+        and depth (used by the witness picture); None: nothing.
     """
 
     views: tuple = DEFAULT_VIEWS
@@ -124,13 +130,11 @@ class Look:
     point_size: float = 6.0
     labels: bool = True
     dpi: int = 110
+    colouring: Colouring = Colouring()
+    extra: object = None
 
 
-#: Keywords of ``render_png`` that colour the shape (one row of ``render_rows``); the others make a ``Look``.
-COLOURING = ("cmap", "vmin", "vmax", "colorbar_label", "extra")
-
-
-def render_png(path, vertices, faces=None, values=None, landmarks=(), *, fig=None, **options):
+def render_png(path, vertices, faces=None, values=None, landmarks=(), *, fig=None, look: Look = Look()):
     """Render a shape from several views into one PNG (written atomically), or onto a Figure.
 
     Parameters
@@ -149,31 +153,27 @@ def render_png(path, vertices, faces=None, values=None, landmarks=(), *, fig=Non
     fig : matplotlib Figure or None
         Draw onto this Figure; with ``path=None`` the Figure (``fig`` or a new
         one) is returned instead of writing a file.
-    **options : the colouring, ``cmap`` (default "viridis"), ``vmin``, ``vmax``,
-        ``colorbar_label`` and ``extra`` (``extra(ax, project)`` is called for every
-        view after the shape is drawn, with ``project(points (k, 3)) -> (k, 3)``
-        taking points in the input's coordinates to screen x, screen y and depth;
-        used by the witness picture), and the fields of ``Look``.
+    look : Look (views, up, title, point size, labels, dpi, the colouring of ``values`` and ``extra``).
 
     Returns
     -------
     str (the path written) or Figure (``path=None``)
     """
-    row = dict(values=values, landmarks=landmarks, cmap="viridis", label=None)
-    row.update({k: options.pop(k) for k in COLOURING if k in options})
-    return render_rows(path, vertices, faces, [row], fig=fig, **options)
+    c = look.colouring
+    row = dict(values=values, landmarks=landmarks, cmap=c.cmap, vmin=c.vmin, vmax=c.vmax, colorbar_label=c.label,
+               extra=look.extra, label=None)
+    return render_rows(path, vertices, faces, [row], fig=fig, look=look)
 
 
-def render_rows(path, vertices, faces, rows, *, fig=None, **look):
+def render_rows(path, vertices, faces, rows, *, fig=None, look: Look = Look()):
     """Several colourings of one shape, one row of views each, in one PNG (or Figure).
 
-    ``rows`` is a list of dicts with the keys of ``render_png`` (``values``,
-    ``landmarks``, ``extra``, ``cmap``, ``vmin``, ``vmax``, ``colorbar_label``) and
-    ``label`` (a caption written left of the row).  Each row with scalar values gets
-    its own colour bar.  ``look``: the fields of ``Look``.  With ``path=None`` the
+    ``rows`` is a list of dicts with the keys ``values``, ``landmarks``, ``extra``, ``cmap``,
+    ``vmin``, ``vmax``, ``colorbar_label`` (as ``render_png``'s) and ``label`` (a caption written
+    left of the row).  Each row with scalar values gets its own colour bar.  ``look``: views, up,
+    title, point size, labels and dpi (its colouring is ``render_png``'s).  With ``path=None`` the
     Figure is returned (see ``render_png``).
     """
-    look = Look(**look)
     fig = draw_rows(fig, vertices, faces, rows, look)
     return fig if path is None else save_figure(fig, path, look.dpi)
 
@@ -182,8 +182,8 @@ def draw_rows(fig, vertices, faces, rows, look: Look = Look()) -> Figure:
     """Draw the rows of ``render_rows`` onto ``fig`` (a new Figure when None) and return it."""
     rows = [dict(r) for r in rows]
     extras = [r.pop("extra", None) for r in rows]
-    scene = make_scene(vertices, faces, rows, up=look.up, views=look.views, title=look.title,
-                       point_size=look.point_size)
+    scene = make_scene(vertices, faces, rows,
+                       place=Place(look.up, look.views, look.title, point_size=look.point_size))
     return draw_scene(fig, scene, labels=look.labels, extras=extras)
 
 

@@ -68,6 +68,39 @@ class ColourBar:
         return [matplotlib.colors.to_hex(c) for c in rgba]
 
 
+@dataclass(frozen=True)
+class Colouring:
+    """How scalars become colours (``colour_layer``): ``cmap`` from ``vmin`` to ``vmax`` (None: the finite
+    range of the values), ``label`` the colour bar's caption."""
+
+    cmap: str = "viridis"
+    vmin: float | None = None
+    vmax: float | None = None
+    label: str | None = None
+
+
+@dataclass(frozen=True)
+class Place:
+    """How a scene stands and what it says (``make_scene``).
+
+    Attributes
+    ----------
+    up : the data's vertical direction ("z", "y", a signed "-y"...); None: the vertices are display
+        coordinates already (kept as they are).  The scenes of one shape (``heatmap_scene``,
+        ``witness_scene``, ``landmark_scene``'s callers) read None as "guess it" (``guess_up``).
+    views : (elevation, azimuth) camera positions in degrees.
+    title : the scene's title.
+    notes : texts shown with the scene.
+    point_size : marker size of a point cloud; None: 6, or 30 for a point cloud of at most 2000 points.
+    """
+
+    up: str | None = "z"
+    views: tuple = DEFAULT_VIEWS
+    title: str | None = None
+    notes: tuple = ()
+    point_size: float | None = None
+
+
 @dataclass(frozen=True, eq=False)
 class Layer:
     """One colouring of a scene's vertices.
@@ -271,47 +304,52 @@ def guess_up(*geometries) -> str:
     return max(UP_CANDIDATES, key=lambda up: total[up])  # ties: the earlier candidate
 
 
-def colour_layer(data, n: int, cmap: str = "viridis", vmin=None, vmax=None, *, hover=None, **kw) -> Layer:
-    """A Layer coloured by ``data``: None (grey), (n,) scalars through ``cmap`` or (n, 3|4) colours.
+def colour_layer(data, n: int, colouring: Colouring = Colouring(), *, hover=None) -> Layer:
+    """A Layer coloured by ``data``: None (grey), (n,) scalars through ``colouring`` or (n, 3|4) colours.
 
-    Scalars get a ColourBar from ``vmin``/``vmax`` (default: their finite range;
-    non-finite values take the top colour).  ``hover``: the values read out on
-    hover (default: the scalars themselves).  ``kw`` are the other Layer fields
-    (``label``, ``landmarks``, ``value_name``, ...) and ``colorbar_label``.
+    Scalars get a ColourBar from ``colouring`` (default range: their finite range; non-finite values
+    take the top colour).  ``hover``: the values read out on hover (default: the scalars themselves).
+    The Layer's other fields (``label``, ``landmarks``, ``value_name``, ...) are set by the caller
+    (``dataclasses.replace``).
     """
-    label = kw.pop("colorbar_label", None)
-    if hover is not None:
-        kw["values"] = np.asarray(hover, dtype=float)
+    values = None if hover is None else np.asarray(hover, dtype=float)
     if data is None:
-        return Layer(np.tile([*GREY, 1.0], (n, 1)), **kw)
+        return Layer(np.tile([*GREY, 1.0], (n, 1)), values=values)
     v = np.asarray(data, dtype=float)
     if v.ndim == 2 and v.shape[0] == n and v.shape[1] in (3, 4):
         rgba = np.ones((n, 4))
         rgba[:, : v.shape[1]] = np.clip(v, 0.0, 1.0)
-        return Layer(rgba, **kw)
+        return Layer(rgba, values=values)
     if v.shape != (n,):
         raise InputError(f"values must have shape ({n},), ({n}, 3) or ({n}, 4), got {v.shape}")
     finite = v[np.isfinite(v)]
+    vmin, vmax = colouring.vmin, colouring.vmax
     lo = float(np.min(finite)) if vmin is None and finite.size else (vmin if vmin is not None else 0.0)
     hi = float(np.max(finite)) if vmax is None and finite.size else (vmax if vmax is not None else 1.0)
     if hi <= lo:
         hi = lo + 1.0
-    bar = ColourBar(cmap, float(lo), float(hi), label)
+    bar = ColourBar(colouring.cmap, float(lo), float(hi), colouring.label)
     rgba = np.asarray(bar.mappable().to_rgba(np.where(np.isfinite(v), v, hi)), dtype=float)
-    kw.setdefault("values", v)
-    return Layer(rgba, colorbar=bar, **kw)
+    return Layer(rgba, values=v if values is None else values, colorbar=bar)
 
 
-def make_scene(vertices, faces, layers, *, up: str | None = "z", ids=None, views=DEFAULT_VIEWS, **meta) -> Scene:
+def layer_of(spec: dict, n: int) -> Layer:
+    """The Layer of a dict of ``make_scene``: ``values`` coloured by ``cmap``, ``vmin``, ``vmax`` and
+    ``colorbar_label`` (``Colouring``), the other keys the Layer's fields (``label``, ``landmarks``,
+    ``notes``, ...)."""
+    spec = dict(spec)
+    colouring = Colouring(spec.pop("cmap", "viridis"), spec.pop("vmin", None), spec.pop("vmax", None),
+                          spec.pop("colorbar_label", None))
+    return replace(colour_layer(spec.pop("values", None), n, colouring), **spec)
+
+
+def make_scene(vertices, faces, layers, *, ids=None, place: Place = Place()) -> Scene:
     """A Scene of one shape given in input coordinates (checked; landmarks must be vertex indices).
 
-    ``meta``: the Scene's ``title``, ``notes`` and ``point_size`` (default 6, or 30 for
-    a point cloud of at most 2000 points).
-
-    ``layers`` are Layers, or dicts of ``colour_layer`` arguments (``values``,
-    ``cmap``, ``vmin``, ``vmax``, ``colorbar_label``, ``label``, ``landmarks``,
-    ``notes``, ``segments`` in input coordinates).  ``up=None``: the vertices are
-    display coordinates already (kept as they are).
+    ``layers`` are Layers, or dicts of ``layer_of`` (``values``, ``cmap``, ``vmin``, ``vmax``,
+    ``colorbar_label``, ``label``, ``landmarks``, ``notes``, ``segments`` in input coordinates).
+    ``ids``: the input's id of every vertex (default: their indices).  ``place``: up direction
+    (None: ``vertices`` are display coordinates already), views, title, notes and point size.
     """
     from ..deformation.energy import vertex_normals
 
@@ -322,17 +360,16 @@ def make_scene(vertices, faces, layers, *, up: str | None = "z", ids=None, views
     F = None if faces is None else np.asarray(faces, dtype=np.int64)
     if F is not None and (F.ndim != 2 or F.shape[1] != 3 or (F.size and (F.min() < 0 or F.max() >= n))):
         raise InputError("faces must be an (m, 3) array of vertex indices")
-    if not views:
+    if not place.views:
         raise InputError("at least one view is needed")
+    up = place.up
     centre, frame = (np.zeros(3), np.eye(3)) if up is None else (V.mean(axis=0), up_frame(up, V))
     D = (V - centre) @ frame.T
     out = []
     for lay in layers:
         if isinstance(lay, dict):
-            lay = dict(lay)
-            seg = lay.pop("segments", None)
-            lay = colour_layer(lay.pop("values", None), n, lay.pop("cmap", "viridis"), lay.pop("vmin", None),
-                               lay.pop("vmax", None), **lay)
+            seg = lay.get("segments")
+            lay = layer_of({k: v for k, v in lay.items() if k != "segments"}, n)
             if seg is not None:
                 seg = np.asarray(seg, dtype=float).reshape(-1, 2, 3)
                 lay = replace(lay, segments=(seg - centre) @ frame.T)
@@ -340,13 +377,13 @@ def make_scene(vertices, faces, layers, *, up: str | None = "z", ids=None, views
         if any(v < 0 or v >= n for v in lms):
             raise InputError("landmark vertex index out of range")
         out.append(replace(lay, landmarks=lms))
-    point_size = meta.pop("point_size", None)
+    point_size = place.point_size
     if point_size is None:
         point_size = 6.0 if F is not None or n > 2000 else 30.0
-    meta["notes"] = tuple(meta.get("notes", ()))
     return Scene(D, F, tuple(out), np.arange(n) if ids is None else np.asarray(ids, dtype=np.int64),
-                 tuple(tuple(float(a) for a in v) for v in views), centre=centre, frame=frame,
-                 point_size=float(point_size), normals=None if F is None else vertex_normals(D, F), **meta)
+                 tuple(tuple(float(a) for a in v) for v in place.views), centre=centre, frame=frame,
+                 point_size=float(point_size), normals=None if F is None else vertex_normals(D, F),
+                 title=place.title, notes=tuple(place.notes))
 
 
 # --- the scenes of the commands ----------------------------------------------------------
@@ -408,23 +445,47 @@ def interpolate_to_vertices(shape, values, method: str = "smooth", k: int = 4) -
     return idw(V, src, vals, k)
 
 
-def heatmap_scene(shape, values, *, landmarks=(), up=None, method="smooth", cmap="turbo",
-                  colorbar_label="σ with the point fixed", log=None, **place) -> Scene:
-    """The heat map of ``viz.heatmap.render_heatmap_png`` as a Scene (see there for the arguments);
-    ``place``: ``views`` and ``title`` (``make_scene``)."""
+@dataclass(frozen=True)
+class HeatMapStyle:
+    """How a heat map is drawn (``heatmap_scene``, ``viz.heatmap.render_heatmap_png``).
+
+    Attributes
+    ----------
+    up : the data's vertical direction; None guesses it (``guess_up``).
+    views, title : as ``Place``.
+    method : "smooth" or "nearest" interpolation between the samples (``interpolate_to_vertices``).
+    cmap, colorbar_label : the colour map and the colour bar's caption.
+    log : colour by log10 of the values; None: when max/min > 20 (points near a mirror plane keep
+        huge scores and would flatten the rest of the scale).  Infinite values are drawn with the
+        largest finite one.
+    """
+
+    up: str | None = None
+    views: tuple = DEFAULT_VIEWS
+    title: str | None = None
+    method: str = "smooth"
+    cmap: str = "turbo"
+    colorbar_label: str = "σ with the point fixed"
+    log: bool | None = None
+
+
+def heatmap_scene(shape, values, *, landmarks=(), style: HeatMapStyle = HeatMapStyle()) -> Scene:
+    """The heat map of ``viz.heatmap.render_heatmap_png`` as a Scene (see there for the arguments)."""
     V, F, pts, ids = shape_points(shape)
-    vv = interpolate_to_vertices(shape, values, method=method)
+    vv = interpolate_to_vertices(shape, values, method=style.method)
     finite = vv[np.isfinite(vv)]
     vmax = float(finite.max()) if finite.size else 1.0
     vv = np.where(np.isfinite(vv), vv, vmax)
+    log = style.log
     if log is None:  # auto: a wide range (one near-symmetry left) would flatten everything else
         log = finite.size > 0 and finite.min() > 0 and vmax / finite.min() > 20.0
     shown = np.log10(vv) if log else vv
-    label = f"log10 {colorbar_label}" if log else colorbar_label
+    label = f"log10 {style.colorbar_label}" if log else style.colorbar_label
     lm = [int(pts[int(i)]) for i in landmarks]
-    layer = colour_layer(shown, len(V), cmap, colorbar_label=label, landmarks=lm, hover=vv,
-                         value_name=colorbar_label)
-    return make_scene(V, F, [layer], up=up or guess_up(getattr(shape, "geometry", None)), ids=ids, **place)
+    layer = replace(colour_layer(shown, len(V), Colouring(style.cmap, label=label), hover=vv), landmarks=lm,
+                    value_name=style.colorbar_label)
+    up = style.up or guess_up(getattr(shape, "geometry", None))
+    return make_scene(V, F, [layer], ids=ids, place=Place(up, style.views, style.title))
 
 
 def position_colours(V: np.ndarray) -> np.ndarray:
@@ -434,9 +495,9 @@ def position_colours(V: np.ndarray) -> np.ndarray:
     return 0.1 + 0.85 * c
 
 
-def witness_scene(shape, witness, *, landmarks=(), up=None, views=DEFAULT_VIEWS, max_segments: int = 80,
-                  title=None) -> Scene:
-    """The two rows of ``viz.witness.render_witness_png`` (reference colours, their pull-back) as a Scene."""
+def witness_scene(shape, witness, *, landmarks=(), place: Place = Place(up=None), max_segments: int = 80) -> Scene:
+    """The two rows of ``viz.witness.render_witness_png`` (reference colours, their pull-back) as a Scene;
+    ``place.up`` None guesses the up direction (``guess_up``)."""
 
     D = np.asarray(shape.D, dtype=float)
     n = int(shape.n_samples)
@@ -456,14 +517,14 @@ def witness_scene(shape, witness, *, landmarks=(), up=None, views=DEFAULT_VIEWS,
     layers = [dict(values=ref, landmarks=lm, label="reference (colour = position)"),
               dict(values=ref[pts[t[near]]], landmarks=lm, segments=segments,
                    label=f"witness T ({moved}/{n} samples moved)")]
-    scene = make_scene(V, F, layers, up=up or guess_up(getattr(shape, "geometry", None)), ids=ids, views=views,
-                       title=title)
+    scene = make_scene(V, F, layers, ids=ids,
+                       place=replace(place, up=place.up or guess_up(getattr(shape, "geometry", None))))
     # hover read-out of the witness layer: where the nearest sample is sent (input id)
     wit = replace(scene.layers[1], values=target_id.astype(float), value_name="nearest sample sent to vertex")
     return scene.with_layers([scene.layers[0], wit])
 
 
-def landmark_scene(V, F, landmarks, *, notes=(), label="landmarks", **place) -> Scene:
+def landmark_scene(V, F, landmarks, *, notes=(), label="landmarks", ids=None, place: Place = Place()) -> Scene:
     """A grey shape with landmarks in order; ``notes``: one text per landmark (e.g. the score after it);
-    ``place``: ``up``, ``ids``, ``views``, ``title`` (``make_scene``)."""
-    return make_scene(V, F, [dict(landmarks=landmarks, notes=tuple(notes), label=label)], **place)
+    ``ids`` and ``place`` as ``make_scene``."""
+    return make_scene(V, F, [dict(landmarks=landmarks, notes=tuple(notes), label=label)], ids=ids, place=place)

@@ -19,10 +19,11 @@ The picture's render data is ``scene.witness_scene`` (the HTML viewer shows the 
 from __future__ import annotations
 
 from .render import render_scene
-from .scene import witness_scene
+from .scene import Place, witness_scene
 
 
-def render_witness_png(shape, witness, path, *, landmarks=(), fig=None, **options):
+def render_witness_png(shape, witness, path, *, landmarks=(), fig=None, place: Place = Place(up=None),
+                       max_segments: int = 80):
     """Draw a witness map on its shape (see the module docstring).
 
     Parameters
@@ -36,18 +37,17 @@ def render_witness_png(shape, witness, path, *, landmarks=(), fig=None, **option
         PNG to write.
     landmarks : sequence of int
         Sample indices fixed by the map, drawn as markers.
-    up : {"x", "y", "z"}, optionally signed ("-y"), or None
-        Vertical direction of the data; None guesses it from the shape (``scene.guess_up``:
-        the direction whose floor most of its extremities touch).
-    max_segments : int
-        Number of the longest moves drawn as segments (default 80).
-    views, title : as ``render.Look``.
     fig : matplotlib Figure or None
         Draw onto it; with ``path=None`` the Figure is returned, nothing written.
+    place : scene.Place: ``up`` ({"x", "y", "z"}, optionally signed ("-y"), or None: guessed from the
+        shape, ``scene.guess_up``: the direction whose floor most of its extremities touch), ``views``,
+        ``title``.
+    max_segments : int
+        Number of the longest moves drawn as segments.
 
     Returns
     -------
     str (the path written) or Figure (``path=None``)
     """
-    scene = witness_scene(shape, witness, landmarks=landmarks, **options)
+    scene = witness_scene(shape, witness, landmarks=landmarks, place=place, max_segments=max_segments)
     return render_scene(path, scene, fig=fig)
