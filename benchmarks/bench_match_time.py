@@ -69,9 +69,13 @@ print(json.dumps(dict(wall=time.perf_counter() - w, cpu=time.process_time() - c)
 
 CNBS_SCALE = r"""
 import json, time
+import numpy as np
 import shapecond as sc
+from shapecond.selection.cnbs import cnbs_landmarks
 path = {null!r}
 sc.metric_shape(path)                                             # geodesics cached before the timing
+P = np.random.default_rng(0).normal(size=(30, 3))
+cnbs_landmarks(np.linalg.norm(P[:, None] - P[None], axis=2), 20, 1, budget=1e-3, effort="quick")  # numba compiled
 w, c = time.perf_counter(), time.process_time()
 r = sc.landmarks(path, 6, "cnbs-scale")
 print(json.dumps(dict(wall=time.perf_counter() - w, cpu=time.process_time() - c,
