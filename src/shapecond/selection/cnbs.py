@@ -35,7 +35,14 @@ heat map is a lower bound per candidate, assembled in four steps:
    for the ``n_cross`` highest-valued other candidates (repaired to fix it) and, for
    N <= ``FULL_VERIFY_N``, by a fresh ``witness_search``; if its value rises, the new
    argmin is verified in turn (at most ``max_verify`` rounds).  Warm starts alone can
-   miss a map that only exists with p fixed; this catches it where it matters.
+   miss a map that only exists with p fixed; this catches it where it matters.  Each
+   distinct donor map is searched once (donors often share their best map: a repeated
+   start finds nothing new, and on TOSCA cat0 repeats were most of the verification's
+   time).  With pruning a verification stops once the leader's value passes the runner-up's
+   (in the tie walk below: the window's end), since it has then lost the comparison it was
+   verified for; if the runner-up's value rises in turn and the cut leader becomes the
+   argmin again, its verification is run again from its start in full (``complete``), so
+   the landmarks are those of verifications run in full.
 
 6. **Pruning** (``prune=True``, what ``cnbs_landmarks`` uses).  Candidates are
    evaluated in tie-break order, and each search stops as soon as its value passes the
@@ -57,10 +64,11 @@ once δ has reached its plateau (benchmarks, landmark spread).  The argmin m is 
 as above; then the candidates are walked from the farthest, each searched only until
 its value passes m + tolerance, and the first that stays below (after verification)
 is the choice.  And each next heat map of δ starts from a fresh ``witness_search`` with
-the new landmark (warm-started from the chosen candidate's maps), not from those maps
-alone: warm starts repaired from maps of fewer landmarks miss the widest map within the
-budget (on TOSCA wolf, heat values of 0.06 where a fresh search finds δ = 0.137), and the
-heat map can only rank candidates against a base that has it.
+the new landmark (warm-started from the chosen candidate's maps; none after the last
+landmark, where no heat map follows), not from those maps alone: warm starts repaired
+from maps of fewer landmarks miss the widest map within the budget (on TOSCA wolf, heat
+values of 0.06 where a fresh search finds δ = 0.137), and the heat map can only rank
+candidates against a base that has it.
 
 Threads (``shapecond.threads``): with pruning, candidates go one at a time (in chunks the
 incumbent lags behind and prunes far less) and draw their kicks from one generator in
