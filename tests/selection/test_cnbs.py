@@ -190,3 +190,39 @@ def test_cnbs_options_are_one_object_and_the_interface_takes_their_fields():
         heat_map(D, 24, n_kicks=2)
     with pytest.raises(TypeError):
         HeatMapOptions(n_kick=2)
+
+
+def test_cut_verifications_choose_what_full_ones_do(monkeypatch):
+    """CNBS-scale's verifications stop once the leader passes the runner-up (or the tie window) and are
+    completed from their start when they matter again, and each donor map is searched once: the
+    landmarks and the scores are those of verifications run in full from every donor."""
+    from shapecond.selection import cnbs
+    from shapecond.symmetry.scale import budget_of, default_epsilon
+
+    verify, complete = cnbs._HeatMapRun.verify, cnbs._HeatMapRun.complete
+    calls = {"cut": 0, "complete": 0}
+
+    def counted_verify(self, c, stop=math.inf, count=True):
+        cut = verify(self, c, stop, count)
+        calls["cut"] += cut
+        return cut
+
+    def counted_complete(self, c, stop=math.inf):
+        calls["complete"] += 1
+        complete(self, c, stop)
+
+    for seed in range(4):
+        n = 36
+        D = mirror_pairs_instance(n, 80 + seed, noise=0.06)
+        kw = {"budget": budget_of(default_epsilon(D, n), n, D), "options": CNBSOptions(effort="quick", n_cross=8)}
+        with monkeypatch.context() as m:
+            m.setattr(cnbs._HeatMapRun, "verify", counted_verify)
+            m.setattr(cnbs._HeatMapRun, "complete", counted_complete)
+            got = cnbs_landmarks(D, n, 4, **kw)
+        with monkeypatch.context() as m:
+            m.setattr(cnbs._HeatMapRun, "verify",  # never cut
+                      lambda self, c, stop=math.inf, count=True: verify(self, c, count=count))
+            m.setattr(cnbs, "_distinct", list)
+            want = cnbs_landmarks(D, n, 4, **kw)
+        assert got["landmarks"] == want["landmarks"] and got["scores"] == want["scores"]
+    assert calls["cut"] and calls["complete"]  # otherwise this test tests nothing

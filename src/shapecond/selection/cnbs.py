@@ -35,7 +35,14 @@ heat map is a lower bound per candidate, assembled in four steps:
    for the ``n_cross`` highest-valued other candidates (repaired to fix it) and, for
    N <= ``FULL_VERIFY_N``, by a fresh ``witness_search``; if its value rises, the new
    argmin is verified in turn (at most ``max_verify`` rounds).  Warm starts alone can
-   miss a map that only exists with p fixed; this catches it where it matters.
+   miss a map that only exists with p fixed; this catches it where it matters.  Each
+   distinct donor map is searched once (donors often share their best map: a repeated
+   start finds nothing new, and on TOSCA cat0 repeats were most of the verification's
+   time).  With pruning a verification stops once the leader's value passes the runner-up's
+   (in the tie walk below: the window's end), since it has then lost the comparison it was
+   verified for; if the runner-up's value rises in turn and the cut leader becomes the
+   argmin again, its verification is run again from its start in full (``complete``), so
+   the landmarks are those of verifications run in full.
 
 6. **Pruning** (``prune=True``, what ``cnbs_landmarks`` uses).  Candidates are
    evaluated in tie-break order, and each search stops as soon as its value passes the
@@ -57,10 +64,11 @@ once δ has reached its plateau (benchmarks, landmark spread).  The argmin m is 
 as above; then the candidates are walked from the farthest, each searched only until
 its value passes m + tolerance, and the first that stays below (after verification)
 is the choice.  And each next heat map of δ starts from a fresh ``witness_search`` with
-the new landmark (warm-started from the chosen candidate's maps), not from those maps
-alone: warm starts repaired from maps of fewer landmarks miss the widest map within the
-budget (on TOSCA wolf, heat values of 0.06 where a fresh search finds δ = 0.137), and the
-heat map can only rank candidates against a base that has it.
+the new landmark (warm-started from the chosen candidate's maps; none after the last
+landmark, where no heat map follows), not from those maps alone: warm starts repaired
+from maps of fewer landmarks miss the widest map within the budget (on TOSCA wolf, heat
+values of 0.06 where a fresh search finds δ = 0.137), and the heat map can only rank
+candidates against a base that has it.
 
 Threads (``shapecond.threads``): with pruning, candidates go one at a time (in chunks the
 incumbent lags behind and prunes far less) and draw their kicks from one generator in
@@ -256,6 +264,17 @@ class HeatMap:
         return int(cand[order[0]])
 
 
+def _distinct(maps) -> list:
+    """``maps`` without repeats, in order (a local search from a repeated start finds nothing new)."""
+    seen, out = set(), []
+    for t in maps:
+        key = np.asarray(t, dtype=np.int64).tobytes()
+        if key not in seen:
+            seen.add(key)
+            out.append(t)
+    return out
+
+
 def _maps_of(res, n_maps):
     maps = list(getattr(res, "maps", None) or [])
     if not maps:
@@ -296,7 +315,9 @@ def heat_map(D, n_samples=None, landmarks=(), base=None, budget=None, progress=N
         run.break_ties(c)
     # values are not clipped at sigma0: a value above it means the search with p fixed
     # found a better witness than the base search did (then sigma0 was weak).
-    return HeatMap(run.values, run.sigma0, tuple(L), run.moved, run.resolved, run.pruned, run.results,
+    pruned = run.pruned.copy()
+    pruned[list(run.partial)] = True  # verifications cut short: weaker lower bounds too
+    return HeatMap(run.values, run.sigma0, tuple(L), run.moved, run.resolved, pruned, run.results,
                    time.perf_counter() - t0, run.tie, run.spread)
 
 
@@ -328,6 +349,7 @@ class _HeatMapRun:
         self.resolved = np.zeros(n, dtype=bool)
         self.pruned = np.zeros(n, dtype=bool)
         self.verified = np.zeros(n, dtype=bool)
+        self.partial = {}  # candidate -> (value, result) before its verification was cut short
         self.rounds = 0
         self.values[cand] = self.floor[cand]
         self.tie, self.spread = 0.0, None
@@ -385,18 +407,25 @@ class _HeatMapRun:
             if progress:
                 progress(min(k0 + step, order.size), order.size)
 
-    def verify(self, c):
+    def verify(self, c, stop=math.inf, count=True) -> bool:
         """5. Search candidate ``c`` again from the donors' maps (repaired to fix it) and, for
         N <= FULL_VERIFY_N or resolve="full", by a fresh witness_search warm-started from its
-        own best map."""
+        own best map.  ``count``: a round of its own (not the completion of a verification cut
+        short, ``complete``).
+
+        With pruning the search stops once ``c``'s value passes ``stop`` (the value at which it
+        loses the comparison it is verified for): True then, and its value, a weaker lower bound,
+        is kept with what it had before in ``partial`` until ``complete`` runs it in full."""
         opts, L = self.opts, self.L
-        self.verified[c] = True
-        self.rounds += 1
+        if count:
+            self.verified[c] = True
+            self.rounds += 1
         if self.moved[c] == 0.0:
-            return  # fixed by the witness: its value sigma0 is attained and maximal
-        starts = [repair_fixing(t, c) for t in self.donor_maps]
-        r = self.polish(L + [c], c, extra_starts=starts)
-        if opts.resolve == "full" or self.n <= FULL_VERIFY_N:
+            return False  # fixed by the witness: its value sigma0 is attained and maximal
+        before = (self.values[c], self.results.get(c))
+        starts = _distinct([repair_fixing(t, c) for t in self.donor_maps])
+        r, cut = self.polish.bounded(L + [c], c, extra_starts=starts, stop=stop if opts.prune else math.inf)
+        if not cut and (opts.resolve == "full" or self.n <= FULL_VERIFY_N):
             own = [self.results[c].witness] if c in self.results else []
             r2 = witness_search(self.D, n_samples=self.n, landmarks=L + [c], seed=opts.seed, starts=own,
                                 effort=opts.effort, budget=self.budget)
@@ -404,6 +433,25 @@ class _HeatMapRun:
         if r is not None and float(r.sigma) > self.values[c]:
             self.values[c] = float(r.sigma)
             self.results[c] = r
+        if cut:
+            self.partial[c] = before
+        return cut
+
+    def complete(self, c, stop=math.inf):
+        """The verification of ``c`` that was cut short, run again from its start (what it had before),
+        until ``stop``: the value and result a verification in full gives when not cut again."""
+        self.values[c], r = self.partial.pop(c)
+        if r is None:
+            self.results.pop(c, None)
+        else:
+            self.results[c] = r
+        self.verify(c, stop, count=False)
+
+    def runner_up(self, c) -> float:
+        """The smallest value of the candidates other than ``c`` (inf if none): ``c`` stays the argmin
+        of ``HeatMap.argmin`` without ties as long as its value does not pass it."""
+        others = self.values[self.cand[self.cand != c]]
+        return float(np.min(others)) if others.size else math.inf
 
     def settle(self) -> int:
         """5. Verify the leaders until the argmin is a verified candidate (at most
@@ -414,12 +462,15 @@ class _HeatMapRun:
         self.donor_maps = [self.results[p].witness for p in donors]
         while True:
             c = HeatMap(self.values, self.sigma0, tuple(L), self.moved, self.resolved).argmin()
+            if c in self.partial:  # its verification stopped above the runner-up, which has since risen
+                self.complete(c)
+                continue
             if self.pruned[c]:  # the returned argmin is never a pruned candidate
                 self.pruned[c] = self.evaluate(c, math.inf)
                 continue
             if self.verified[c] or self.rounds >= self.opts.max_verify or self.moved[c] == 0.0:
                 return c
-            self.verify(c)
+            self.verify(c, self.runner_up(c))
 
     def break_ties(self, c):
         """6'. Near-ties of δ (module docstring): walk the candidates from the farthest from the
@@ -434,11 +485,15 @@ class _HeatMapRun:
                 break
             if values[p] > window:
                 continue  # already a lower bound above the tie
+            if p in self.partial:  # verified in settle until it passed the runner-up: now until the window
+                self.complete(p, window)
             if pruned[p]:
                 pruned[p] = self.evaluate(p, window)  # only a pruned search is resumed
             if not pruned[p] and values[p] <= window and not self.verified[p] and \
                     self.rounds < self.opts.max_verify:
-                self.verify(p)
+                self.verify(p, window)
+            if p in self.partial and values[p] <= window:
+                self.complete(p)  # cut on a tracked value whose exact re-score is within the window
             if not pruned[p] and values[p] <= window:
                 break
 
@@ -468,16 +523,17 @@ def _swap_witness(D, n, L, base, budget=None):
     return WarmPolisher(D, n, _maps_of(base, N_MAPS), L[:-1], budget)(L, L[-1], extra_starts=[t])
 
 
-def _next_base(D, n, L, c, hm, prev, budget, opts):
+def _next_base(D, n, L, c, hm, prev, budget, opts, fresh=True):
     """The witness search result with the new landmark ``c`` fixed that the next heat map starts
     from: the heat map ``hm``'s result for ``c``, or a map attaining the single-swap floor when
     that won (warm-started from ``prev``, the base of ``hm``, if ``c`` has no result); for δ, a
-    fresh search warm-started from its maps if it finds more (module docstring)."""
+    fresh search warm-started from its maps if it finds more (module docstring), unless ``fresh``
+    is False (after the last landmark, where no heat map follows)."""
     base = hm.results.get(c)
     if base is None or float(base.sigma) < hm.values[c]:
         # the single-swap floor won: continue from a witness that attains it
         base = _swap_witness(D, n, L + [c], base or prev, budget)
-    if budget is not None:
+    if budget is not None and fresh:
         # δ: a fresh search with the new landmark, warm-started from the heat map's maps
         # (module docstring, on ties): the next heat map starts from it
         fresh = witness_search(D, n_samples=n, landmarks=L + [c], seed=opts.seed, effort=opts.effort,
@@ -501,7 +557,8 @@ def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=N
     -------
     dict with ``landmarks`` (new sample indices in order), ``scores`` (σ lower bound
     after each), ``initial_score`` (σ with only ``fixed``), ``heat_maps`` (list of
-    HeatMap when ``keep_heat_maps``), ``witness`` (final witness map).
+    HeatMap when ``keep_heat_maps``), ``witness`` (a map attaining the last score: for δ the
+    fresh search of ``_next_base`` is not run after the last landmark, nothing would use it).
     """
     opts = options
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
@@ -517,7 +574,7 @@ def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=N
         c = hm.argmin()
         new.append(c)
         scores.append(float(hm.values[c]))
-        base = _next_base(D, n, L, c, hm, base, budget, opts)
+        base = _next_base(D, n, L, c, hm, base, budget, opts, fresh=step + 1 < k)
         L.append(c)
         if opts.keep_heat_maps:
             maps.append(hm)
