@@ -96,23 +96,28 @@ LAPLACE_COST = (8.0, 4.8e-6)
 #: Seconds per (source point x target vertex x basis function) of the dense stage's float32
 #: nearest-neighbour products (``matching.zoomout.nearest_rows``; 7-8e-11 at 2.5k-41k vertices).
 NEAREST_COST = 7.5e-11
+#: Subsample cells' worth of target vertices a final-pass region holds (``matching.zoomout``), measured:
+#: the pass took 0.9 s where the search of every target vertex took 16.9 s (52,565 vertices, k = 150,
+#: 1,500 cells of 35 vertices: about 2,800 candidates, 80 cells).
+REGION_CELLS = 80
 
 
 def dense_stage_seconds(n_source: int, n_target: int, k: int = 150, subsample: int = 10) -> float:
     """Estimated seconds of the ZoomOut dense stage (``matching.zoomout``) between meshes of
     ``n_source`` and ``n_target`` vertices with a basis of ``k`` functions: both Laplace bases, the
     iterations (``subsample`` k source points against every target vertex at k = 20, 30, ..., k) and
-    the final map of every source vertex.
+    the final map of every source vertex, searched in a region of ``REGION_CELLS`` cells.
 
     Examples
     --------
-    >>> dense_stage_seconds(163842, 163842) > 4 * dense_stage_seconds(40962, 40962) > 0
+    >>> dense_stage_seconds(163842, 163842) > 3 * dense_stage_seconds(40962, 40962) > 0
     True
     """
     base, per = LAPLACE_COST
     bases = 2 * base + per * (n_source + n_target) * k
     levels = sum(subsample * j * j for j in range(20, k + 1, 10))
-    return bases + NEAREST_COST * n_target * (levels + n_source * k)
+    region = min(n_target, REGION_CELLS * n_target / (subsample * k))
+    return bases + NEAREST_COST * (n_target * levels + region * n_source * k)
 
 
 def html_seconds(n_vertices: int) -> float:
