@@ -6,7 +6,7 @@ import pytest
 from shapecond.errors import InputError
 from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.laplace import laplace_basis
-from shapecond.shapes.synthetic import sphere
+from shapecond.shapes.synthetic import bumpy_blob, sphere
 
 
 def test_sphere_spectrum_is_4pi_l_l_plus_1_on_area_one():
@@ -49,3 +49,26 @@ def test_a_point_cloud_gets_a_basis_close_to_its_mesh():
 def test_too_few_vertices_is_an_input_error():
     with pytest.raises(InputError, match="at least 4 vertices"):
         laplace_basis(make_geometry(np.eye(3), np.array([[0, 1, 2]])), cache=False)
+
+
+def test_the_cholesky_route_and_the_lu_fallback_give_one_basis(monkeypatch):
+    """The shifted operator's inverse through CHOLMOD, or scipy's LU where CHOLMOD refuses it: the
+    same eigenvalues and, up to sign (fixed the same way), the same eigenvectors."""
+    import shapecond.shapes.laplace as laplace
+    from shapecond.cholesky import NotPositiveDefinite
+
+    g = bumpy_blob(subdivisions=3)
+    factors = []
+    real = laplace.SparseCholesky
+    monkeypatch.setattr(laplace, "SparseCholesky", lambda A: factors.append(real(A)) or factors[-1])
+    chol = laplace.laplace_basis(g, k=30, cache=False)
+    assert len(factors) == 1  # the Cholesky route was taken (no fallback)
+
+    def refuse(A):
+        raise NotPositiveDefinite("refused")
+
+    monkeypatch.setattr(laplace, "SparseCholesky", refuse)
+    lu = laplace.laplace_basis(g, k=30, cache=False)
+    np.testing.assert_allclose(chol.evals, lu.evals, rtol=1e-7, atol=1e-9)
+    overlap = np.abs(np.einsum("ij,ij->j", chol.evecs * chol.mass[:, None], lu.evecs))
+    assert overlap[:20].min() > 1 - 1e-6  # (the last pairs may sit in a cluster the two orders split)
