@@ -38,7 +38,7 @@ from ..errors import InputError
 from .geometry import Geometry
 
 DEFAULT_EIGENPAIRS = 150
-CACHE_VERSION = "laplace-1"
+CACHE_VERSION = "laplace-2"  # 2: the shift-invert through a Cholesky factor (round-off differs from LU)
 #: Shift of the shift-invert Lanczos iteration (below the zero eigenvalue of the area-1 operator).
 SHIFT = -1e-8
 
