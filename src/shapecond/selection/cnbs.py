@@ -523,23 +523,23 @@ def _swap_witness(D, n, L, base, budget=None):
     return WarmPolisher(D, n, _maps_of(base, N_MAPS), L[:-1], budget)(L, L[-1], extra_starts=[t])
 
 
-def _next_base(D, n, L, c, hm, prev, budget, opts, fresh=True):
+def _next_base(D, n, L, c, hm, prev, budget):
     """The witness search result with the new landmark ``c`` fixed that the next heat map starts
     from: the heat map ``hm``'s result for ``c``, or a map attaining the single-swap floor when
-    that won (warm-started from ``prev``, the base of ``hm``, if ``c`` has no result); for δ, a
-    fresh search warm-started from its maps if it finds more (module docstring), unless ``fresh``
-    is False (after the last landmark, where no heat map follows)."""
+    that won (warm-started from ``prev``, the base of ``hm``, if ``c`` has no result)."""
     base = hm.results.get(c)
     if base is None or float(base.sigma) < hm.values[c]:
         # the single-swap floor won: continue from a witness that attains it
         base = _swap_witness(D, n, L + [c], base or prev, budget)
-    if budget is not None and fresh:
-        # δ: a fresh search with the new landmark, warm-started from the heat map's maps
-        # (module docstring, on ties): the next heat map starts from it
-        fresh = witness_search(D, n_samples=n, landmarks=L + [c], seed=opts.seed, effort=opts.effort,
-                               starts=_maps_of(base, opts.n_maps), budget=budget)
-        base = fresh if float(fresh.sigma) > float(base.sigma) else base
     return base
+
+
+def _fresh_base(D, n, landmarks, base, budget, opts):
+    """For δ, a fresh search with ``landmarks`` fixed, warm-started from ``base``'s maps (module
+    docstring, on ties), if it finds more than ``base``: the next heat map starts from it."""
+    fresh = witness_search(D, n_samples=n, landmarks=landmarks, seed=opts.seed, effort=opts.effort,
+                           starts=_maps_of(base, opts.n_maps), budget=budget)
+    return fresh if float(fresh.sigma) > float(base.sigma) else base
 
 
 @single_blas_thread
@@ -558,7 +558,7 @@ def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=N
     dict with ``landmarks`` (new sample indices in order), ``scores`` (σ lower bound
     after each), ``initial_score`` (σ with only ``fixed``), ``heat_maps`` (list of
     HeatMap when ``keep_heat_maps``), ``witness`` (a map attaining the last score: for δ the
-    fresh search of ``_next_base`` is not run after the last landmark, nothing would use it).
+    fresh search of ``_fresh_base`` is not run after the last landmark, nothing would use it).
     """
     opts = options
     D = np.ascontiguousarray(np.asarray(D, dtype=float))
@@ -574,8 +574,10 @@ def cnbs_landmarks(D, n_samples, k, fixed=(), base=None, budget=None, progress=N
         c = hm.argmin()
         new.append(c)
         scores.append(float(hm.values[c]))
-        base = _next_base(D, n, L, c, hm, base, budget, opts, fresh=step + 1 < k)
+        base = _next_base(D, n, L, c, hm, base, budget)
         L.append(c)
+        if budget is not None and step + 1 < k:  # no heat map follows the last landmark
+            base = _fresh_base(D, n, L, base, budget, opts)
         if opts.keep_heat_maps:
             maps.append(hm)
         else:
