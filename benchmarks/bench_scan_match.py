@@ -163,6 +163,7 @@ def main(argv=None) -> None:
     ap.add_argument("--matcher", default="faq")
     ap.add_argument("--baseline", default=None, help="git revision to compare with (default: merge base with main)")
     ap.add_argument("--no-baseline", action="store_true")
+    ap.add_argument("--section", default="scan-match", help="RESULTS.md section to write (scan-match-200k, ...)")
     a = ap.parse_args(argv)
     if len(a.pair) not in (0, 2):
         ap.error("give both SOURCE and TARGET, or neither")
@@ -185,7 +186,7 @@ def main(argv=None) -> None:
             "each column a fresh interpreter with an empty cache, one BLAS/numba thread, run one after the "
             "other. CPU per stage is exclusive; the load average is the machine's (other jobs share it).", "",
             *table(runs, agreement)]
-    write_section("scan-match", "\n".join(body))
+    write_section(a.section, "\n".join(body))
     print("\n".join(body))
 
 
