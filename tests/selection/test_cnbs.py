@@ -222,7 +222,7 @@ def test_cut_verifications_choose_what_full_ones_do(monkeypatch):
         with monkeypatch.context() as m:
             m.setattr(cnbs._HeatMapRun, "verify",  # never cut
                       lambda self, c, stop=math.inf, count=True: verify(self, c, count=count))
-            m.setattr(cnbs, "_distinct", list)
+            m.setattr(cnbs, "distinct_maps", list)
             want = cnbs_landmarks(D, n, 4, **kw)
         assert got["landmarks"] == want["landmarks"] and got["scores"] == want["scores"]
     assert calls["cut"] and calls["complete"]  # otherwise this test tests nothing

@@ -97,6 +97,7 @@ from ..threads import single_blas_thread
 from ..symmetry.objective import isometry_floor, swap_terms
 from ..symmetry.scale import resolution
 from ..symmetry.search import witness_search
+from ..symmetry.starts import distinct_maps
 from ..threads import thread_map
 from .warm import WarmPolisher
 
@@ -264,17 +265,6 @@ class HeatMap:
         return int(cand[order[0]])
 
 
-def _distinct(maps) -> list:
-    """``maps`` without repeats, in order (a local search from a repeated start finds nothing new)."""
-    seen, out = set(), []
-    for t in maps:
-        key = np.asarray(t, dtype=np.int64).tobytes()
-        if key not in seen:
-            seen.add(key)
-            out.append(t)
-    return out
-
-
 def _maps_of(res, n_maps):
     maps = list(getattr(res, "maps", None) or [])
     if not maps:
@@ -423,7 +413,7 @@ class _HeatMapRun:
         if self.moved[c] == 0.0:
             return False  # fixed by the witness: its value sigma0 is attained and maximal
         before = (self.values[c], self.results.get(c))
-        starts = _distinct([repair_fixing(t, c) for t in self.donor_maps])
+        starts = distinct_maps([repair_fixing(t, c) for t in self.donor_maps])
         r, cut = self.polish.bounded(L + [c], c, extra_starts=starts, stop=stop if opts.prune else math.inf)
         if not cut and (opts.resolve == "full" or self.n <= FULL_VERIFY_N):
             own = [self.results[c].witness] if c in self.results else []

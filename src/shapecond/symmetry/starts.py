@@ -217,15 +217,20 @@ def spectral_starts(DX: np.ndarray, free: np.ndarray, n_vectors: int = 10,
     return _distinct(_until(start, jobs, deadline), n)  # linear assignments release the GIL
 
 
-def _distinct(maps, n: int) -> list[np.ndarray]:
-    """``maps`` in order without duplicates and without the identity."""
+def distinct_maps(maps) -> list:
+    """``maps`` in order without repeats (a search from a repeated start finds nothing new)."""
     out, seen = [], set()
     for t in maps:
-        key = t.tobytes()
-        if key not in seen and np.any(t != np.arange(n)):
+        key = np.asarray(t, dtype=np.int64).tobytes()
+        if key not in seen:
             seen.add(key)
             out.append(t)
     return out
+
+
+def _distinct(maps, n: int) -> list[np.ndarray]:
+    """``maps`` in order without duplicates and without the identity."""
+    return [t for t in distinct_maps(maps) if np.any(t != np.arange(n))]
 
 
 def gilmore_lawler(DX: np.ndarray, landmarks: np.ndarray) -> np.ndarray:
