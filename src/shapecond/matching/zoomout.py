@@ -66,7 +66,7 @@ ends from FAQ's start (0.043 and 0.017).  Its first level (k = 20) already moves
 repeating the whole-basis level from the truth drifts too (TOSCA_r cat2 → cat3: 0.013 after one
 step, 0.019 after 20, with or without the anchors, with a least-squares or an orthogonal C), while
 the schedule's own output is a fixed point of that level.  From FAQ's start the shipped schedule
-beats every shorter one tried on every row, so a better start alone gains nothing unless the
+beats every shorter one tried on average (on every SMAL_r row), so a better start alone gains nothing unless the
 schedule is shortened with it.  Tried and rejected, each on 4–12 SMAL_r rows: a mass-preserving
 (Sinkhorn) pointwise step at the subsample levels (from the truth 0.055 → 0.156 on one pair); a
 bidirectional step that also matches the reverse map's functional map (+2 to +12 ×10⁻³ on all
