@@ -126,6 +126,19 @@ def test_insert_landmarks_keeps_n_and_puts_landmarks_first(pair):
     assert np.allclose(out.rows[np.arange(40), out.samples], 0.0)
 
 
+def test_insert_landmarks_shares_the_rows_when_the_landmarks_are_already_first(pair):
+    """sample_surface puts the landmarks first: inserting them again copies no row (the match keeps both
+    surfaces), and a surface whose rows change is a new one, the original untouched."""
+    src = pair[0]
+    surf = sample_surface(src, 40, landmarks=[5, 600], cache=False)
+    same, idx = insert_landmarks(surf, [5, 600])
+    assert same.rows is surf.rows and np.array_equal(same.samples, surf.samples) and list(idx) == [0, 1]
+    before = surf.rows.copy()
+    moved, _ = insert_landmarks(surf, [600, 7])
+    assert list(moved.samples[:2]) == [600, 7] and not np.shares_memory(moved.rows, surf.rows)
+    assert np.array_equal(surf.rows, before)
+
+
 def test_errors_from_rows_and_normalisations():
     rows = np.array([[0.0, 2.0, 4.0], [1.0, 0.0, 3.0]])
     e = errors_from_rows(rows, [2, 0])

@@ -266,5 +266,6 @@ def insert_landmarks(surface: SampledSurface, landmarks, solver: DistanceSolver 
     where = {int(v): i for i, v in enumerate(samples)}
     first = np.array([where[v] for v in lm.tolist()], dtype=np.int64)
     order = np.concatenate([first, np.setdiff1d(np.arange(samples.size), first)])
-    out = replace(surface, samples=samples[order], rows=rows[order])
-    return out, np.arange(lm.size, dtype=np.int64)
+    if not np.array_equal(order, np.arange(samples.size)):  # already first (sample_surface's order): the
+        samples, rows = samples[order], rows[order]            # same rows, no copy (336 MB at 210k vertices)
+    return replace(surface, samples=samples, rows=rows), np.arange(lm.size, dtype=np.int64)
