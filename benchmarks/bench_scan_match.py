@@ -22,6 +22,9 @@ exclusive (a stage called inside another is not counted twice):
 * the error bar (``matching.error_bar.bar_and_samples``);
 * the rest (loading, the extension of the sample map, imports).
 
+Memory: the process's peak RSS (``ru_maxrss``) when each stage last ends, so the stage whose
+end first shows the final peak is where it occurs, and the whole run's max RSS.
+
 Default pair (no data needed): ``demo:animal:resolution=0.0104`` and its deformation
 ``demo:animal:delta=0.4,resolution=0.0104`` (about 50k vertices, one vertex order), 6 ids
 spread over the vertex order as landmarks on both.  The maps of the two versions are
@@ -54,12 +57,12 @@ STAGES = ["geodesics and samples", "landmark rows", "sample matcher", "Laplace�
 
 # the child: exclusive CPU per stage, by wrapping each stage's function wherever it is bound
 CHILD = r"""
-import json, sys, time
+import json, resource, sys, time
 import numpy as np
 import shapecond as sc
 import shapecond.api.matching, shapecond.matching.pipeline as P, shapecond.matching.zoomout as Z
 import shapecond.matching.sampled as S, shapecond.matching.error_bar as E, shapecond.shapes.laplace as LB
-cpu, stack = {}, []
+cpu, stack, rss = {}, [], {}
 
 def timed(name, f):
     def wrapper(*a, **kw):
@@ -71,6 +74,7 @@ def timed(name, f):
             spent = time.process_time() - t
             inner = stack.pop()
             cpu[name] = cpu.get(name, 0.0) + spent - inner
+            rss[name] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # the peak so far
             if stack:
                 stack[-1] += spent
     return wrapper
@@ -108,7 +112,7 @@ if _calls:
 np.save(OUT, r.map)
 bar = r.summary.get("error_bar") or {}
 print(json.dumps(dict(stages=cpu, match_cpu=total, bar=bar.get("bar"), delta=bar.get("delta"),
-                      n=int(r.map.size))))
+                      n=int(r.map.size), peaks=rss)))
 """
 
 
@@ -136,7 +140,7 @@ def run(src: Path | None, pair: tuple, ls: str, lt: str, matcher: str, out: Path
     return r
 
 
-def table(runs: dict, agreement: float | None) -> list[str]:
+def table(runs: dict, agreement: float | None, reference: str | None = None) -> list[str]:
     names = list(runs)
     lines = ["| stage (CPU s, exclusive) | " + " | ".join(names) + " |", "|---|" + "---:|" * len(names)]
     for stage in STAGES + ["rest"]:
@@ -150,8 +154,15 @@ def table(runs: dict, agreement: float | None) -> list[str]:
                             ("error bar (sqrt(area))", "bar", "{:.4f}"), ("δ RMS", "delta", "{:.4f}")):
         lines.append(f"| {label} | " + " | ".join(fmt.format(r[key]) if r[key] is not None else "–"
                                                    for r in runs.values()) + " |")
+    lines += ["", "| peak RSS (MB) when the stage last ends: the process's peak so far | " + " | ".join(names) + " |",
+              "|---|" + "---:|" * len(names)]
+    for stage in [s for s in STAGES if any(s in r.get("peaks", {}) for r in runs.values())]:
+        label = "ZoomOut (its final pass included)" if stage == "ZoomOut iterations" else stage
+        lines.append(f"| {label} | " + " | ".join(f"{r['peaks'][stage]:.0f}" if stage in r.get("peaks", {}) else "–"
+                                                  for r in runs.values()) + " |")
     if agreement is not None:
-        lines += ["", f"Maps agree on {100 * agreement:.3f} % of the {runs[names[0]]['n']:,} source vertices."]
+        lines += ["", f"Maps agree on {100 * agreement:.3f} % of the {runs[names[0]]['n']:,} source vertices"
+                  + (f" (this tree's against {reference})." if reference else ".")]
     return lines
 
 
@@ -164,6 +175,9 @@ def main(argv=None) -> None:
     ap.add_argument("--baseline", default=None, help="git revision to compare with (default: merge base with main)")
     ap.add_argument("--no-baseline", action="store_true")
     ap.add_argument("--section", default="scan-match", help="RESULTS.md section to write (scan-match-200k, ...)")
+    ap.add_argument("--save-map", default=None, help="write this tree's map (.npy), to compare a later run with")
+    ap.add_argument("--reference-map", default=None,
+                    help="a map saved by --save-map (another tree's): report this tree's agreement with it")
     a = ap.parse_args(argv)
     if len(a.pair) not in (0, 2):
         ap.error("give both SOURCE and TARGET, or neither")
@@ -178,6 +192,10 @@ def main(argv=None) -> None:
         runs = {name: run(src, pair, ls, lt, a.matcher, Path(tmp) / f"map{i}.npy")
                 for i, (name, src) in enumerate(trees.items())}
         maps = [np.load(Path(tmp) / f"map{i}.npy") for i in range(len(trees))]
+    if a.save_map:
+        np.save(a.save_map, maps[-1])
+    if a.reference_map:
+        maps = [np.load(a.reference_map)] + maps[-1:]
     agreement = float(np.mean(maps[0] == maps[-1])) if len(maps) == 2 else None
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
     body = [f"## Cold match at scan resolution, stage by stage ({machine()})", "",
@@ -185,7 +203,7 @@ def main(argv=None) -> None:
             f"Pair: `{pair[0]}` → `{pair[1]}`, landmarks {ls} → {lt}, matcher {a.matcher}, error bar on; "
             "each column a fresh interpreter with an empty cache, one BLAS/numba thread, run one after the "
             "other. CPU per stage is exclusive; the load average is the machine's (other jobs share it).", "",
-            *table(runs, agreement)]
+            *table(runs, agreement, a.reference_map)]
     write_section(a.section, "\n".join(body))
     print("\n".join(body))
 

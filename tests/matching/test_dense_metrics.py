@@ -86,6 +86,23 @@ def test_zoomout_beats_the_distance_extension_which_beats_nearest_sample(pair, m
     assert errs["zoomout"] < errs["distances"] < errs["nearest"], errs
 
 
+def test_distance_extension_in_small_cost_blocks_is_the_same_map(pair, monkeypatch):
+    """The ``"distances"`` extension computes each cell's costs in blocks of source vertices (bounded
+    memory): blocks of 1, of a few rows and one block per cell give the same image to every vertex."""
+    from shapecond.matching import dense
+    from shapecond.matching.seeded import FAQOptions, faq_match
+
+    src, _, tgt, _, ls, lt = pair
+    s, ils = insert_landmarks(sample_surface(src, 60, cache=False), ls)
+    t, ilt = insert_landmarks(sample_surface(tgt, 60, cache=False), lt)
+    sm = faq_match(s.D, t.D, ils, ilt, FAQOptions())
+    maps = {}
+    for entries in (1, 1000, 1 << 40):
+        monkeypatch.setattr(dense, "COST_ENTRIES", entries)
+        maps[entries] = dense.dense_map(s, t, sm.t)
+    assert np.array_equal(maps[1], maps[1 << 40]) and np.array_equal(maps[1000], maps[1 << 40])
+
+
 def test_bad_pairs_are_input_errors(pair):
     src, _, tgt, _, ls, lt = pair
     with pytest.raises(InputError, match="counts differ"):
@@ -107,6 +124,19 @@ def test_insert_landmarks_keeps_n_and_puts_landmarks_first(pair):
     assert np.unique(out.samples).size == 40
     # rows follow their samples: distance of each sample to itself is 0
     assert np.allclose(out.rows[np.arange(40), out.samples], 0.0)
+
+
+def test_insert_landmarks_shares_the_rows_when_the_landmarks_are_already_first(pair):
+    """sample_surface puts the landmarks first: inserting them again copies no row (the match keeps both
+    surfaces), and a surface whose rows change is a new one, the original untouched."""
+    src = pair[0]
+    surf = sample_surface(src, 40, landmarks=[5, 600], cache=False)
+    same, idx = insert_landmarks(surf, [5, 600])
+    assert same.rows is surf.rows and np.array_equal(same.samples, surf.samples) and list(idx) == [0, 1]
+    before = surf.rows.copy()
+    moved, _ = insert_landmarks(surf, [600, 7])
+    assert list(moved.samples[:2]) == [600, 7] and not np.shares_memory(moved.rows, surf.rows)
+    assert np.array_equal(surf.rows, before)
 
 
 def test_errors_from_rows_and_normalisations():

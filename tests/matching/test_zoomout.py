@@ -22,6 +22,28 @@ def test_nearest_rows_is_the_brute_force_argmin():
         np.testing.assert_allclose(dist(got), dist(brute), rtol=1e-4, atol=1e-5)
 
 
+def test_nearest_rows_in_small_score_blocks_is_the_same_map(monkeypatch):
+    """Large targets (and large search regions) get fewer source rows per block of scores
+    (``SCORE_BYTES``): the same nearest rows (a block changes only the products' round-off, which
+    may swap near-equal candidates on real shapes), exact ties to the lowest index in every block."""
+    from shapecond.matching import zoomout as Z
+
+    rng = np.random.default_rng(1)
+    X, Y = rng.normal(size=(700, 30)), rng.normal(size=(900, 30))
+    Y[5] = Y[2]  # a tie: the lowest index wins in every block
+    X[:3] = Y[2]
+    cell = rng.integers(0, 4, size=700)
+    regions = [np.sort(rng.choice(900, size=300, replace=False)) for _ in range(4)]
+    regions[int(cell[0])] = np.union1d(regions[int(cell[0])], [2, 5])
+    whole, in_regions = nearest_rows(X, Y), Z._nearest_in_regions(X, Y, cell, regions)
+    assert list(whole[:3]) == [2, 2, 2] and in_regions[0] == 2
+    assert all(in_regions[i] in regions[c] for i, c in enumerate(cell))
+    for budget in (1, 4 * 900 * 7):  # blocks of 1 and of 7 rows
+        monkeypatch.setattr(Z, "SCORE_BYTES", budget)
+        assert np.array_equal(nearest_rows(X, Y), whole)
+        assert np.array_equal(Z._nearest_in_regions(X, Y, cell, regions), in_regions)
+
+
 def test_functional_map_of_the_identity_is_the_identity_matrix():
     b = laplace_basis(bumpy_blob(subdivisions=3), k=20, cache=False)
     C = functional_map(b.evecs, b.mass, b.evecs)

@@ -40,6 +40,19 @@ def test_paper_start_and_seeded_determinism():
     assert a.samples[0] == np.argmax(np.linalg.norm(pts - pts[r], axis=1))
 
 
+def test_kept_rows_are_the_samples_rows_in_float32_and_change_no_sample():
+    """``keep_rows=True`` returns every sample's row as the solver gave it, rounded to float32 (what
+    ``matching.sampled.sample_surface`` stores), whatever the budget; the samples are those without."""
+    g = synthetic.bumpy_blob(subdivisions=2)
+    solver = DistanceSolver(g)  # the heat method: rows fetched ahead in blocks, some never used
+    kept = farthest_point_sampling(solver, 40, landmarks=[3, 50], keep_rows=True)
+    plain = farthest_point_sampling(solver, 40, landmarks=[3, 50], keep_rows=False)
+    assert plain.rows is None and farthest_point_sampling(solver, 5).rows is None  # default: not returned
+    assert np.array_equal(kept.samples, plain.samples)
+    assert kept.rows.dtype == np.float32 and kept.rows.shape == (40, g.n_vertices)
+    np.testing.assert_allclose(kept.rows, solver.distances(kept.samples), rtol=1e-6, atol=1e-7)
+
+
 def test_landmarks_first_and_voronoi_labels():
     solver, pts = _cloud_solver(4)
     fps = farthest_point_sampling(solver, 12, landmarks=[5, 17, 2])

@@ -3,8 +3,8 @@
 Matching works on the N × N sample distances ``D``, but the dense extension
 (``dense.py``) and the error metrics (``metrics.py``) also need the distance
 from every sample to every vertex: the ``(N, n)`` *rows*.  Farthest-point
-sampling computes exactly these rows, so ``sample_surface`` records them while
-it runs ``shapecond.shapes.sampling.farthest_point_sampling`` (same samples as
+sampling computes exactly these rows, so ``sample_surface`` has
+``shapecond.shapes.sampling.farthest_point_sampling`` keep them (same samples as
 ``metric_shape`` with the same arguments, hence the same samples the landmark
 methods see) and caches them on disk beside the metric-shape cache.
 
@@ -86,20 +86,6 @@ def surface_unit(geometry: Geometry, raw_diameter: float) -> float:
     return float(raw_diameter)
 
 
-class _RecordingSolver:
-    """Wraps a DistanceSolver and keeps every row it returns (keyed by source)."""
-
-    def __init__(self, solver: DistanceSolver):
-        self.solver, self.n, self.kept = solver, solver.n, {}
-        self.block, self.guess = getattr(solver, "block", 1), getattr(solver, "guess", None)
-
-    def distances(self, sources):
-        out = self.solver.distances(sources)
-        for s, row in zip(np.atleast_1d(sources), out):
-            self.kept[int(s)] = row.astype(np.float32)
-        return out
-
-
 class CachedSolver:
     """A DistanceSolver built on first use that remembers every row it computed.
 
@@ -154,10 +140,9 @@ def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat
                          lambda a: _check_entry(a, n, landmarks)) if cache else None
     if z is not None:
         return SampledSurface(geometry, z["samples"].astype(np.int64), z["rows"], float(z["unit"]), backend)
-    rec = _RecordingSolver(solver if solver is not None else DistanceSolver(geometry, backend))
-    fps = farthest_point_sampling(rec, n_points, landmarks=landmarks, seed=seed)
-    rows = np.stack([rec.kept[int(s)] for s in fps.samples])
-    surf = SampledSurface(geometry, fps.samples, rows, surface_unit(geometry, float(rows.max())),
+    solver = solver if solver is not None else DistanceSolver(geometry, backend)
+    fps = farthest_point_sampling(solver, n_points, landmarks=landmarks, seed=seed, keep_rows=True)
+    surf = SampledSurface(geometry, fps.samples, fps.rows, surface_unit(geometry, float(fps.rows.max())),
                           backend)
     if cache:
         disk.save_arrays("matching", key, {"samples": surf.samples, "rows": surf.rows, "unit": surf.unit})
@@ -281,5 +266,6 @@ def insert_landmarks(surface: SampledSurface, landmarks, solver: DistanceSolver 
     where = {int(v): i for i, v in enumerate(samples)}
     first = np.array([where[v] for v in lm.tolist()], dtype=np.int64)
     order = np.concatenate([first, np.setdiff1d(np.arange(samples.size), first)])
-    out = replace(surface, samples=samples[order], rows=rows[order])
-    return out, np.arange(lm.size, dtype=np.int64)
+    if not np.array_equal(order, np.arange(samples.size)):  # already first (sample_surface's order): the
+        samples, rows = samples[order], rows[order]            # same rows, no copy (336 MB at 210k vertices)
+    return replace(surface, samples=samples, rows=rows), np.arange(lm.size, dtype=np.int64)

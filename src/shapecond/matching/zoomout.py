@@ -94,8 +94,11 @@ from shapecond.matching.harmonic import harmonic_coordinates
 from shapecond.matching.orientation import orientation_features
 from shapecond.shapes.laplace import LaplaceBasis
 
-#: Source rows per block of the nearest-neighbour products.
+#: Source rows per block of the nearest-neighbour products, at most.
 BLOCK = 2048
+#: Bytes of one block of scores (float32, a block of source rows × every target vertex): fewer rows
+#: per block on large targets (79 at 210k vertices, where 2,048 rows took 1.7 GB); the same map.
+SCORE_BYTES = 64 * 2**20
 #: Subsample neighbours whose images bound a cell's search in the final pass (module docstring).
 CELL_NEIGHBOURS = 6
 
@@ -193,10 +196,11 @@ def nearest_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     Y = np.ascontiguousarray(Y, dtype=np.float32)
     half_norms = 0.5 * np.einsum("ij,ij->i", Y, Y)
     out = np.empty(X.shape[0], dtype=np.int64)
-    for s in range(0, X.shape[0], BLOCK):
-        score = X[s:s + BLOCK] @ Y.T
+    step = int(np.clip(SCORE_BYTES // (4 * max(Y.shape[0], 1)), 1, BLOCK))
+    for s in range(0, X.shape[0], step):
+        score = X[s:s + step] @ Y.T
         score -= half_norms  # argmax of x·y − |y|²/2 is the argmin of |x − y|²
-        out[s:s + BLOCK] = np.argmax(score, axis=1)
+        out[s:s + step] = np.argmax(score, axis=1)
     return out
 
 
@@ -313,13 +317,24 @@ def _pointwise(X: np.ndarray, Y: np.ndarray, blocks, scales, regions=None) -> np
     """Nearest rows of ``[X, c_1 a_1, ...]`` among ``[Y, c_1 b_1, ...]`` for the blocks ``(a_i, b_i)``
     at scales ``c_i``; ``regions``: (cell of every row of X, candidate rows of Y of every cell), or
     None to search every row of Y."""
-    xs, ys = [X.astype(np.float32)], [Y.astype(np.float32)]
-    for (a, b), c in zip(blocks, scales):
-        xs.append(np.float32(c) * a)
-        ys.append(np.float32(c) * b)
+    xs, ys = _embedding(X, [a for a, _ in blocks], scales), _embedding(Y, [b for _, b in blocks], scales)
     if regions is None:
-        return nearest_rows(np.hstack(xs), np.hstack(ys))
-    return _nearest_in_regions(np.hstack(xs), np.hstack(ys), *regions)
+        return nearest_rows(xs, ys)
+    return _nearest_in_regions(xs, ys, *regions)
+
+
+def _embedding(first: np.ndarray, blocks: list, scales) -> np.ndarray:
+    """``[first, c_1 b_1, ...]`` rounded to float32, written into one array: no float32 copy of
+    ``first`` before the stack (126 MB for each side at 210k vertices and k = 150).  Each block is
+    scaled in its own precision and then rounded, the same values as a stack of the parts."""
+    widths = [first.shape[1]] + [b.shape[1] for b in blocks]
+    out = np.empty((first.shape[0], sum(widths)), dtype=np.float32)
+    out[:, :widths[0]] = first
+    at = widths[0]
+    for b, c, width in zip(blocks, scales, widths[1:]):
+        out[:, at:at + width] = np.float32(c) * b
+        at += width
+    return out
 
 
 def _search_regions(subsample_points: np.ndarray, target_points: np.ndarray, images: np.ndarray) -> list:
@@ -348,6 +363,10 @@ def _nearest_in_regions(X: np.ndarray, Y: np.ndarray, cell: np.ndarray, regions:
     for c, cand in enumerate(regions):
         rows = order[bounds[c]:bounds[c + 1]]
         if rows.size:
-            score = X[rows] @ Y[cand].T - half_norms[cand]
-            out[rows] = cand[np.argmax(score, axis=1)]
+            Yc, hc = Y[cand], half_norms[cand]
+            step = int(np.clip(SCORE_BYTES // (4 * max(cand.size, 1)), 1, rows.size))
+            for s in range(0, rows.size, step):  # a cell of a non-uniform mesh: 595 MB of scores at 210k
+                score = X[rows[s:s + step]] @ Yc.T
+                score -= hc
+                out[rows[s:s + step]] = cand[np.argmax(score, axis=1)]
     return out

@@ -37,12 +37,14 @@ class FPSResult:
     D : (N, N) float64 raw distances between the samples (symmetric, zero diagonal).
     min_dist : (n,) distance of every vertex to its closest sample.
     nearest : (n,) index into ``samples`` of every vertex's closest sample.
+    rows : (N, n) float32 distances from every sample to every vertex, when kept (``keep_rows``), else None.
     """
 
     samples: np.ndarray
     D: np.ndarray
     min_dist: np.ndarray
     nearest: np.ndarray
+    rows: np.ndarray | None = None
 
 
 class _Front:
@@ -139,8 +141,23 @@ class _Rows:
         return self.spare.pop(v)
 
 
+def _checked_request(n: int, n_samples: int, landmarks) -> list[int]:
+    """The landmarks as ints, once ``n_samples`` samples with them are possible among ``n`` vertices."""
+    if n_samples < 3:
+        raise InputError(f"at least 3 samples are needed, got {n_samples}")
+    if n_samples > n:
+        raise InputError(f"cannot take {n_samples} samples from {n} vertices")
+    landmarks = [int(v) for v in landmarks]
+    if len(set(landmarks)) != len(landmarks):
+        raise InputError("landmarks are repeated")
+    if len(landmarks) > n_samples:
+        raise InputError(f"{len(landmarks)} landmarks but only {n_samples} samples requested")
+    return landmarks
+
+
 def farthest_point_sampling(solver, n_samples: int, landmarks=(), seed: int = 0,
-                            symmetry=None, stops=(), progress: bool = False) -> FPSResult:
+                            symmetry=None, stops=(), progress: bool = False,
+                            keep_rows: bool | None = None) -> FPSResult:
     """Sample ``n_samples`` vertices by FPS with distances from ``solver``.
 
     Parameters
@@ -159,20 +176,18 @@ def farthest_point_sampling(solver, n_samples: int, landmarks=(), seed: int = 0,
     stops : sequence of int
         Prefix sizes that must also be closed under ``symmetry`` (e.g. N when
         sampling M = 8N dense targets whose first N are the samples).
+    keep_rows : bool or None
+        Keep every sample's distance row (float32) and return them as
+        ``FPSResult.rows``; None: only when they fit in ``ROW_BUDGET_BYTES``
+        (and then only to symmetrise ``D``).
     """
     n = solver.n
-    if n_samples < 3:
-        raise InputError(f"at least 3 samples are needed, got {n_samples}")
-    if n_samples > n:
-        raise InputError(f"cannot take {n_samples} samples from {n} vertices")
-    landmarks = [int(v) for v in landmarks]
-    if len(set(landmarks)) != len(landmarks):
-        raise InputError("landmarks are repeated")
-    if len(landmarks) > n_samples:
-        raise InputError(f"{len(landmarks)} landmarks but only {n_samples} samples requested")
+    landmarks = _checked_request(n, n_samples, landmarks)
     if symmetry is not None:
         symmetry = np.asarray(symmetry, dtype=np.int64)
-    keep_rows = n_samples * n * 4 <= ROW_BUDGET_BYTES
+    wanted = keep_rows
+    if keep_rows is None:
+        keep_rows = n_samples * n * 4 <= ROW_BUDGET_BYTES
     rows = np.empty((n_samples, n), dtype=np.float32) if keep_rows else None
     D = np.zeros((n_samples, n_samples))
     samples: list[int] = []
@@ -216,4 +231,4 @@ def farthest_point_sampling(solver, n_samples: int, landmarks=(), seed: int = 0,
         D = rows[:, idx].astype(np.float64)
         D = 0.5 * (D + D.T)
         np.fill_diagonal(D, 0.0)
-    return FPSResult(idx, D, front.min_dist, nearest)
+    return FPSResult(idx, D, front.min_dist, nearest, rows if wanted else None)
