@@ -109,6 +109,25 @@ def test_batch_starts_and_stops_its_own_local_cluster(shape_dir, tmp_path, capsy
     same_rows(read_table(tmp_path / "u.jsonl"), read_table(tmp_path / "t.jsonl"))
 
 
+def _worker_environment():
+    return {k: os.environ.get(k) for k in ("MALLOC_TRIM_THRESHOLD_", *parallel._THREAD_VARIABLES)}
+
+
+@pytest.mark.slow
+def test_a_local_cluster_gives_its_workers_the_thread_share_and_no_malloc_trim(monkeypatch):
+    monkeypatch.setattr(parallel.os, "cpu_count", lambda: 4)
+    # a Dask nanny writes its workers' variables into this process's environment, where the next
+    # cluster's nanny reads them first: start from an environment no earlier cluster of the session set
+    for name in ("MALLOC_TRIM_THRESHOLD_", *parallel._THREAD_VARIABLES):
+        monkeypatch.delenv(name, raising=False)
+    with parallel.runner(1, "local:2") as run:
+        seen = list(run.client.run(_worker_environment).values())
+    assert len(seen) == 2
+    for env in seen:
+        assert env["MALLOC_TRIM_THRESHOLD_"] is None  # Dask's default (65536) costs system time
+        assert {env[k] for k in parallel._THREAD_VARIABLES} == {"2"}  # 4 cores, 2 workers
+
+
 def test_evaluate_quick_on_a_cluster_matches_the_local_run(tmp_path, dask_client, capsys):
     dataset = write_strip_class(tmp_path / "data")
     common = ["evaluate", dataset, "--quick", "--points", "30", "--methods", "fps", "--matchers", "faq", "--json"]
