@@ -75,7 +75,7 @@ whitened block (−1 to −2 ×10⁻³); a multi-scale heat-kernel-signature blo
 every level searching only near the current map (the final pass's regions): from the truth
 0.036 → 0.035 on 8 rows, from FAQ unchanged, so the drift is local sliding, level by level;
 hubness-corrected neighbours (CSLS, 10 nearest) at the subsample levels: 3 % lower on 12 rows
-(TOSCA_r 0.0154 → 0.0150), one row 8 % higher, not validated further.
+(TOSCA_r 0.0154 → 0.0150), one row 5 % higher, not validated further.
 
 Nearest neighbours are found by blocked products in float32 (a k-d tree is
 slower than a brute-force product beyond about 20 dimensions); ties go to the
