@@ -14,7 +14,7 @@ line's ``--jobs`` and ``--scheduler`` say:
   OpenMP and numba threads, and not Dask's default ``MALLOC_TRIM_THRESHOLD_``
   of 64 KiB: with it every large numpy array freed goes back to the kernel and
   the next one faults its pages in again, 1.1–1.5 s of system time in a 5k-vertex
-  ``match`` of about 5 s (0.1 s without), and numba's parallel kernels took
+  ``match`` of about 5 s (0.1 s without), and numba's parallel kernels could take
   both cores in each of the two workers.  A variable already set in this
   process's environment wins (Dask's rule).  A cluster of the user's own
   (``tcp://``) keeps its configuration.
