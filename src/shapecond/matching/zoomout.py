@@ -196,9 +196,14 @@ def nearest_rows(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
     """For every row of ``X`` the index of the nearest row of ``Y`` (Euclidean; ties: lowest index)."""
     X = np.ascontiguousarray(X, dtype=np.float32)
     Y = np.ascontiguousarray(Y, dtype=np.float32)
-    half_norms = 0.5 * np.einsum("ij,ij->i", Y, Y)
+    return _nearest_blocked(X, Y, 0.5 * np.einsum("ij,ij->i", Y, Y), BLOCK)
+
+
+def _nearest_blocked(X: np.ndarray, Y: np.ndarray, half_norms: np.ndarray, max_rows: int) -> np.ndarray:
+    """Index of the nearest row of ``Y`` for every row of ``X`` (float32), ``half_norms`` = |y|²/2,
+    the scores computed for at most ``max_rows`` rows of ``X`` and ``SCORE_BYTES`` at a time."""
     out = np.empty(X.shape[0], dtype=np.int64)
-    step = int(np.clip(SCORE_BYTES // (4 * max(Y.shape[0], 1)), 1, BLOCK))
+    step = int(np.clip(SCORE_BYTES // (4 * max(Y.shape[0], 1)), 1, max(max_rows, 1)))
     for s in range(0, X.shape[0], step):
         score = X[s:s + step] @ Y.T
         score -= half_norms  # argmax of x·y − |y|²/2 is the argmin of |x − y|²
@@ -364,11 +369,6 @@ def _nearest_in_regions(X: np.ndarray, Y: np.ndarray, cell: np.ndarray, regions:
     bounds = np.searchsorted(cell[order], np.arange(len(regions) + 1))
     for c, cand in enumerate(regions):
         rows = order[bounds[c]:bounds[c + 1]]
-        if rows.size:
-            Yc, hc = Y[cand], half_norms[cand]
-            step = int(np.clip(SCORE_BYTES // (4 * max(cand.size, 1)), 1, rows.size))
-            for s in range(0, rows.size, step):  # a cell of a non-uniform mesh: 595 MB of scores at 210k
-                score = X[rows[s:s + step]] @ Yc.T
-                score -= hc
-                out[rows[s:s + step]] = cand[np.argmax(score, axis=1)]
+        if rows.size:  # in blocks: a cell of a non-uniform mesh took 595 MB of scores at 210k vertices
+            out[rows] = cand[_nearest_blocked(X[rows], Y[cand], half_norms[cand], rows.size)]
     return out
