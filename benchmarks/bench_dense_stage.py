@@ -32,13 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
-
-
-def _truth_start(null, ref_s, ref_t):
-    from scipy.spatial import cKDTree
-
-    _, nearest = cKDTree(null.vertices[ref_s]).query(null.vertices)
-    return ref_t[nearest]
+from _releases import truth_start  # noqa: E402
 
 
 def _pair(cls, null, src, ref_s, target_path, a) -> dict:
@@ -62,7 +56,7 @@ def _pair(cls, null, src, ref_s, target_path, a) -> dict:
         maps[m] = found.vertex_map[ref_s]
     s2, _ = insert_landmarks(src, ls, solvers[0])
     t2, _ = insert_landmarks(tgt, lt, solvers[1])
-    truth = dense_stage(null, g, _truth_start(null, ref_s, ref_t), anchors_of(s2, t2, a.landmarks), MatchOptions())
+    truth = dense_stage(null, g, truth_start(null, ref_s, ref_t), anchors_of(s2, t2, a.landmarks), MatchOptions())
     maps["from the truth"] = truth[ref_s]
     raw, diameter, _ = P.reference_errors(g, ref_t, maps, "heat")
     unit = surface_unit(g, diameter)

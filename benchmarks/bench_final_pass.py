@@ -25,6 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
+from _releases import groups  # noqa: E402
 
 
 def _timed_nearest(full: bool, seconds: list):
@@ -74,8 +75,6 @@ def _pair(g, src, ref_s, target_path, n_landmarks: int) -> dict:
 def main() -> None:
     from shapecond.api import load
     from shapecond.evaluation import protocols as P
-    from shapecond.evaluation.datasets import find_classes, pair_groups
-    from shapecond.shapes.pairs_list import read_pairs
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("datasets", nargs="+", type=Path)
@@ -89,9 +88,9 @@ def main() -> None:
              "| dataset | pairs | vertices | images that differ | error, regions | error, every vertex | "
              "worst change | final pass CPU s, regions / every vertex |", "|---|" + "---|" * 7]
     for root in a.datasets:
-        groups = pair_groups(root, read_pairs(a.pairs)) if a.pairs and root == a.datasets[0] else find_classes(root)
+        classes = groups(root, a.pairs if root == a.datasets[0] else None)
         rows = []
-        for g in groups.values():
+        for g in classes.values():
             src = load(g.null)
             ref_s = P._reference_ids(g, g.null, src)
             for t in g.targets[:a.max_targets]:

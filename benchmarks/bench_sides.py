@@ -33,6 +33,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
+from _releases import groups, landmark_sets  # noqa: E402
 
 VARIANTS = ("distances", "harmonic")
 
@@ -66,16 +67,13 @@ def _refine(src, tgt, start, anchors, variant):
 
 def run(a) -> None:
     from shapecond.api import load
-    from shapecond.evaluation.datasets import find_classes, pair_groups
     from shapecond.evaluation.protocols import _reference_ids, landmark_images, reference_errors
     from shapecond.matching.pipeline import MatchOptions, anchors_of, match_shapes
     from shapecond.matching.sampled import CachedSolver, surface_unit
-    from shapecond.shapes.pairs_list import read_pairs
 
-    lms = {(x["cls"], x["method"]): x["vertices"] for x in json.loads(Path(a.landmarks).read_text())["landmarks"]}
-    groups = pair_groups(a.dataset, read_pairs(a.pairs)) if a.pairs else find_classes(a.dataset)
+    lms = landmark_sets(a.landmarks)
     with open(a.out, "w") as out:
-        for name, g in groups.items():
+        for name, g in groups(a.dataset, a.pairs).items():
             src = load(g.null)
             ref_s = _reference_ids(g, g.null, src)
             for tp in g.targets[:a.max_targets]:

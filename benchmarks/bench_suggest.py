@@ -29,14 +29,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
+from _releases import groups  # noqa: E402
 
 
 def _pairs(a):
-    from shapecond.evaluation.datasets import find_classes, pair_groups
-    from shapecond.shapes.pairs_list import read_pairs
-
-    groups = pair_groups(a.dataset, read_pairs(a.pairs)) if a.pairs else find_classes(a.dataset)
-    return [(g, t) for g in groups.values() for t in g.targets[:a.max_targets]]
+    return [(g, t) for g in groups(a.dataset, a.pairs).values() for t in g.targets[:a.max_targets]]
 
 
 def _error(g, ref_t, vmap_internal, ref_s):

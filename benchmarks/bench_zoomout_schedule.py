@@ -30,16 +30,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
+from _releases import groups, landmark_sets, truth_start  # noqa: E402
 
 #: name -> the k_start of each dense stage run in turn.
 SCHEDULES = {"shipped": [20], "from 60": [60], "whole basis once": [None], "whole basis 3x": [None] * 3}
-
-
-def _groups(a):
-    from shapecond.evaluation.datasets import find_classes, pair_groups
-    from shapecond.shapes.pairs_list import read_pairs
-
-    return pair_groups(a.dataset, read_pairs(a.pairs)) if a.pairs else find_classes(a.dataset)
 
 
 def _refine(null, g, start, anchors, schedule):
@@ -71,25 +65,23 @@ def _pair(null, g, ref_s, ref_t, src, ids, truth):
 
 
 def run(a) -> None:
-    from scipy.spatial import cKDTree
-
     from shapecond.api import load
     from shapecond.evaluation import protocols as P
     from shapecond.matching.sampled import sample_surface
 
-    lms = {(d["cls"], d["method"]): d["vertices"] for d in json.loads(Path(a.landmarks).read_text())["landmarks"]}
+    lms = landmark_sets(a.landmarks)
     with open(a.out, "w") as out:
-        for name, cls in _groups(a).items():
+        for name, cls in groups(a.dataset, a.pairs).items():
             null = load(cls.null)
             ref_s = P._reference_ids(cls, cls.null, null)
             src = sample_surface(null, 400, "heat", 0, cache=True)
-            _, nearest = cKDTree(null.vertices[ref_s]).query(null.vertices)
             for t in cls.targets[:a.max_targets]:
                 g = load(t)
                 ref_t = P._reference_ids(cls, t, g)
+                truth = truth_start(null, ref_s, ref_t)
                 for method in a.methods.split(","):
                     if (name, method) in lms:
-                        errors = _pair(null, g, ref_s, ref_t, src, lms[(name, method)], ref_t[nearest])
+                        errors = _pair(null, g, ref_s, ref_t, src, lms[(name, method)], truth)
                         out.write(json.dumps({"pair": f"{cls.null.stem}/{t.stem}", "method": method, **errors}) + "\n")
                         out.flush()
 
