@@ -37,6 +37,24 @@ def test_lower_bound_attained_and_exact_on_small_instances(seed, factor, n_landm
     assert s.displacement == pytest.approx(exact, rel=1e-9, abs=1e-12)  # the search finds the optimum here
 
 
+
+@settings(max_examples=12, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from([0.5, 1.0, 2.0, 4.0]), st.integers(1, 2))
+def test_warm_search_with_one_more_landmark_is_a_feasible_lower_bound(seed, factor, n_landmarks):
+    """The next-landmark suggestion's search: continued from the maps of the search before it,
+    one more sample fixed, without the structured starts of a fresh search."""
+    D = _points(7, seed)
+    eps = factor * default_epsilon(D)
+    before = scale_score(D, landmarks=list(range(n_landmarks)), epsilon=eps, seed=seed)
+    lm = list(range(n_landmarks + 1))
+    s = scale_score(D, landmarks=lm, epsilon=eps, seed=seed, effort="warm", starts=before.maps)
+    assert math.sqrt(obj.d2(D, s.witness) / 7) == pytest.approx(s.displacement, abs=1e-12)
+    assert s.distortion <= eps * (1 + 1e-9)
+    assert all(s.witness[lm] == lm)
+    exact = brute_delta(D, eps, lm)
+    assert s.displacement <= exact + 1e-12
+    assert s.displacement == pytest.approx(exact, rel=1e-9, abs=1e-12)
+
 @pytest.mark.slow
 @settings(max_examples=10, deadline=None)
 @given(st.integers(0, 10_000))

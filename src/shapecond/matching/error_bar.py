@@ -99,6 +99,8 @@ class ErrorBar:
     doubt : (N,) how far the witness moves each sample.
     doubt_ids : input vertex ids of the samples the witness moves farthest (at most ``DOUBT_IDS``).
     seconds : time of the bar (ε̂ and the δ search).
+    maps : the δ search's best maps on the samples (its witness first): the warm starts of the
+        searches the next-landmark suggestion runs with one more sample fixed.
     """
 
     epsilon_hat: float
@@ -113,6 +115,7 @@ class ErrorBar:
     doubt: np.ndarray = field(repr=False)
     doubt_ids: tuple = ()
     seconds: float = 0.0
+    maps: tuple = field(default=(), repr=False)
 
     def to_dict(self) -> dict:
         return {"epsilon_hat": self.epsilon_hat, "epsilon": self.epsilon,
@@ -215,7 +218,7 @@ def error_bar(source: SampledSurface, n_landmarks: int, epsilon_hat: float, seed
     def share(x):
         return x / diameter if diameter > 0 else 0.0
     return ErrorBar(float(epsilon_hat), eps, res.displacement, share(res.displacement), mean, share(mean), floor,
-                    n, res.moved, doubt, tuple(int(v) for v in ids), time.perf_counter() - t0)
+                    n, res.moved, doubt, tuple(int(v) for v in ids), time.perf_counter() - t0, res.maps)
 
 
 def sample_map_bar(source: SampledSurface, target: SampledSurface, sample_map, n_landmarks: int,

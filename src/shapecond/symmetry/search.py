@@ -51,7 +51,10 @@ from shapecond.threads import n_threads, thread_map
 #: Gilmore-Lawler grid size / starts polished, ladder runs, random starts,
 #: ILS kicks, maps refined over dense targets, dense kicks.  ``small``: on
 #: small instances, where a local search costs microseconds, the random starts
-#: and the kicks are each raised to ``small / n_free²``.
+#: and the kicks are each raised to ``small / n_free²``.  ``warm``: a search continued from the
+#: maps of a previous one (``starts``) on an instance that differs by one fixed sample, as the
+#: next-landmark suggestion runs it: the single swap, the warm starts and the kicks only, none
+#: of the structured starts (spectral, Gilmore-Lawler, ladder, random) that a fresh instance needs.
 EFFORTS = {
     "quick": dict(reflect=(6, 2), vectors=6, pairs=3, spectral=4, gl=6, gl_polish=3, ladder=1,
                   random=2, kicks=10, dense=2, dense_kicks=2, small=5e3),
@@ -59,6 +62,7 @@ EFFORTS = {
                     random=2, kicks=24, dense=3, dense_kicks=4, small=1e4),
     "thorough": dict(reflect=(10, 4), vectors=16, pairs=8, spectral=24, gl=16, gl_polish=10, ladder=4,
                      random=24, kicks=200, dense=6, dense_kicks=30, small=2e5),
+    "warm": dict(reflect=(6, 2), kicks=10, dense=2, dense_kicks=2, small=5e3, fresh=False),
 }
 
 #: Reassignment moves consider the ``DENSE_K`` nearest targets of the current image.
@@ -313,7 +317,7 @@ def witness_search(D, n_samples=None, landmarks=(), seed=0, starts=(), effort="d
     seed : seed of ``np.random.default_rng``; the result is deterministic.
     starts : extra initial maps (warm starts), repaired to fix landmarks and be
         injective.
-    effort : "quick", "default" or "thorough" (see ``EFFORTS``).
+    effort : "quick", "default", "thorough", or "warm" to continue from ``starts`` (see ``EFFORTS``).
     time_limit : seconds; the search stops between local searches when reached.
     """
     with one_blas_thread():  # the small products here only lose time to BLAS threads
@@ -332,12 +336,14 @@ def _witness_search(D, n_samples, landmarks, seed, starts, effort, time_limit, b
     s_swap = run.single_swap()
     run.run_all(run.bij, [t for t in warm if t.max() < n])
     # past late() no start is added to the pool any more: the stages are not even built
-    if free.size >= 3 and not run.late():
+    if free.size >= 3 and not run.late() and run.cfg.get("fresh", True):
         run.spectral()
         s_ref = 1.0 / max(s_swap, 1e-6) ** 2 if math.isfinite(s_swap) else 1.0
-        for stage in (lambda: run.ladder(run.gilmore_lawler(s_ref), s_ref), run.random_starts, run.kicks):
+        for stage in (lambda: run.ladder(run.gilmore_lawler(s_ref), s_ref), run.random_starts):
             if not run.late():
                 stage()
+    if free.size >= 3 and not run.late():
+        run.kicks()
     if run.dense is not None and not run.late():
         run.dense_refine([t for t in warm if t.max() >= n])
     return run.pool.result(time.perf_counter() - t_start)
