@@ -75,7 +75,17 @@ whitened block (−1 to −2 ×10⁻³); a multi-scale heat-kernel-signature blo
 every level searching only near the current map (the final pass's regions): from the truth
 0.036 → 0.035 on 8 rows, from FAQ unchanged, so the drift is local sliding, level by level;
 hubness-corrected neighbours (CSLS, 10 nearest) at the subsample levels: 3 % lower on 12 rows
-(TOSCA_r 0.0154 → 0.0150), one row 5 % higher, not validated further.
+(TOSCA_r 0.0154 → 0.0150), one row 5 % higher, not validated further; the spectral block compared
+by direction only (rows scaled to one norm, which removes a local change of area between the
+shapes): from FAQ 3 rows better, 5 worse (SMAL_r, 8 rows).  **Why no optimiser of this stage
+can reach the truth between species: its objective prefers the wrong map.**  On the same 8 SMAL_r
+rows (the cow to 4 animals, FPS and PLS landmarks) the spectral residual
+``min_C Σ_x m_x ‖Φ_s[x] C − Φ_t[T x]‖² / k`` at the whole basis is 0.14–0.24 at the shipped output
+(error 0.021–0.106) and 0.16–0.53 at the map one whole-basis step from the truth (error
+0.014–0.024), higher on every row; the anchor blocks' residual likewise (0.04–0.45 against
+0.06–0.76).  Plain ZoomOut (no anchor, no harmonic block) started from the truth ends at
+0.022–0.053.  A better start, schedule or search of the same objective cannot close that gap; a
+different objective (one the true map between two bodies minimises) is what is missing.
 
 Nearest neighbours are found by blocked products in float32 (a k-d tree is
 slower than a brute-force product beyond about 20 dimensions); ties go to the
