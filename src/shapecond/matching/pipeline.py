@@ -149,11 +149,14 @@ def match_samples(D_source, D_target, landmarks_source, landmarks_target,
     return matcher(D_source, D_target, landmarks_source, landmarks_target, options)
 
 
-def anchors_of(source: SampledSurface, target: SampledSurface, n_landmarks: int) -> Anchors:
-    """The first ``n_landmarks`` samples of two sampled surfaces (their landmark pairs) as anchors."""
+def anchors_of(source: SampledSurface, target: SampledSurface, n_landmarks: int, target_samples=None) -> Anchors:
+    """The landmark pairs of two sampled surfaces as anchors: the first ``n_landmarks`` samples of
+    ``source`` and, on ``target``, the samples ``target_samples`` (default: its first ``n_landmarks``;
+    the carried samples of ``samples="same-ids"`` are shuffled)."""
     L = int(n_landmarks)
-    return Anchors(source.samples[:L], target.samples[:L], source.rows[:L] / source.unit,
-                   target.rows[:L] / target.unit)
+    t = slice(0, L) if target_samples is None else np.asarray(target_samples, dtype=np.int64)
+    return Anchors(source.samples[:L], target.samples[t], source.rows[:L] / source.unit,
+                   target.rows[t] / target.unit)
 
 
 def dense_stage(source_geometry, target_geometry, initial, anchors: Anchors | None,
@@ -208,11 +211,13 @@ def _landmark_pair(landmarks_source, landmarks_target) -> tuple[np.ndarray, np.n
 
 
 def match_landmarks_only(source_geometry, target_geometry, landmarks_source, landmarks_target,
-                         options: MatchOptions = MatchOptions(matcher="zoomout"), solvers=(None, None)) -> DenseMatch:
+                         options: MatchOptions = MatchOptions(matcher="zoomout"), solvers=(None, None),
+                         compared: SampledSurface | None = None) -> DenseMatch:
     """The zoomout matcher (module docstring): from the landmark pairs alone to a dense map.
 
     ``solvers``: optional distance solvers of the two shapes (e.g. ``sampled.CachedSolver``)
-    for the landmarks' geodesic rows.
+    for the landmarks' geodesic rows; ``compared``: the source's samples the starts are compared on
+    (``comparison_samples``; sampled here when None).
     """
     ls, lt = _landmark_pair(landmarks_source, landmarks_target)
     if ls.size < MIN_ZOOMOUT_LANDMARKS:
@@ -227,7 +232,7 @@ def match_landmarks_only(source_geometry, target_geometry, landmarks_source, lan
     maps = [dense_stage(source_geometry, target_geometry, _nearest_description(source_geometry, target_geometry,
                                                                               anchor, k), anchor, options)
             for k in sorted({ls.size, MIN_ZOOMOUT_LANDMARKS})[::-1]]
-    best, compared = _least_distorted(source_geometry, target_geometry, maps, ls, options, solvers[1])
+    best, compared = _least_distorted(source_geometry, target_geometry, maps, ls, options, solvers[1], compared)
     return DenseMatch(maps[best], None, compared, None,
                       dict(matcher="zoomout", dense="zoomout", n_landmarks=int(ls.size),
                            start="every landmark" if best == 0 else f"the first {MIN_ZOOMOUT_LANDMARKS} landmarks"))
@@ -245,15 +250,21 @@ def _nearest_description(source_geometry, target_geometry, anchor: Anchors, k: i
     return nearest_rows(xs, xt)
 
 
+def comparison_samples(source_geometry, landmarks, options: MatchOptions) -> SampledSurface:
+    """The source's samples the zoomout matcher compares its starts on: as many as the error bar's
+    (``error_bar.BAR_SAMPLES``, or N if fewer), landmarks first; the bar reads the map on them."""
+    return sample_surface(source_geometry, min(options.n_points, BAR_SAMPLES), options.backend, options.seed,
+                          landmarks, options.cache)
+
+
 def _least_distorted(source_geometry, target_geometry, maps: list, landmarks, options: MatchOptions,
-                     solver) -> tuple[int, SampledSurface | None]:
+                     solver, compared: SampledSurface | None = None) -> tuple[int, SampledSurface | None]:
     """Index of the map that distorts the source's sample distances least (``error_bar.map_distortion`` on
-    as many samples as the error bar's, landmarks first; the first of equals), and those samples (None:
-    one map, nothing to compare)."""
+    ``compared``, by default ``comparison_samples``; the first of equals), and those samples (None: one
+    map, nothing to compare)."""
     if len(maps) == 1:
         return 0, None
-    src = sample_surface(source_geometry, min(options.n_points, BAR_SAMPLES), options.backend, options.seed,
-                         landmarks, options.cache)
+    src = compared if compared is not None else comparison_samples(source_geometry, landmarks, options)
     solver = solver if solver is not None else CachedSolver(target_geometry, options.backend)
     costs = [map_distortion(src, target_geometry, m[src.samples], solver) for m in maps]
     return int(np.argmin(costs)), src
