@@ -9,6 +9,7 @@ from shapecond.matching import pipeline
 from shapecond.matching import problem as P
 from shapecond.matching.pipeline import MatchOptions
 from shapecond.matching.problem import MatchProblem
+from shapecond.viz import pages
 
 SHAPE = "demo:animal:resolution=0.08"  # 942 vertices
 LM = [0, 100, 200, 300]
@@ -96,6 +97,19 @@ def test_results_are_computed_once_and_kept(pair, monkeypatch):
     assert calls == {"match": 1, "bar": 1, "suggest": 1, "truth": 1}
     err, samples = p.truth_errors(truth)
     assert samples.size == P.TRUTH_SAMPLES and np.all(err >= 0) and err.max() > 0
+
+
+def test_the_match_page_draws_the_errors_its_problem_computed(pair, tmp_path, monkeypatch):
+    r = sc.match(*pair, LM, LM, n_points=40, dense="nearest", cache=False)
+    assert isinstance(r.problem, MatchProblem) and r.advice == r.problem.suggest
+
+    def no_work(*a, **kw):
+        raise AssertionError("the page computed the errors itself")
+    monkeypatch.setattr(pages, "truth_errors", no_work)
+    r.to_html(tmp_path / "a.html", truth="same-ids")
+    r.to_html(tmp_path / "b.html", truth="same-ids")
+    assert len(r.problem._truth_errors) == 1  # one truth, its errors computed once
+    assert (tmp_path / "a.html").read_bytes() == (tmp_path / "b.html").read_bytes()
 
 
 def test_same_ids_samples_know_the_true_sample_map(pair):
