@@ -1,4 +1,4 @@
-"""Landmark-guided matching of two shapes through the Python interface (``matching.pipeline``)."""
+"""Landmark-guided matching of two shapes through the Python interface (``matching.problem.MatchProblem``)."""
 
 from __future__ import annotations
 
