@@ -7,6 +7,7 @@ import shapecond as sc
 from shapecond.errors import InputError
 from shapecond.matching import pipeline
 from shapecond.matching import problem as P
+from shapecond.matching.error_bar import bar_surface
 from shapecond.matching.pipeline import MatchOptions
 from shapecond.matching.problem import MatchProblem
 from shapecond.viz import pages
@@ -71,6 +72,8 @@ def test_the_bar_and_the_suggestions_read_the_samples_the_problem_holds(pair, sa
     bar, doubt, eps, (first,) = p.error_bar, p.doubt, p.epsilon_hat, p.suggest(1)
     assert samplings == sampled
     assert eps == bar.epsilon_hat and doubt.shape == (pair[0].n_vertices,)
+    coarse = bar_surface(p.source, len(landmarks))
+    assert np.array_equal(doubt, bar.doubt[coarse.nearest])  # each vertex takes its nearest bar sample's doubt
     assert np.array_equal(p.source.samples[:len(landmarks)], landmarks)   # the held samples, landmarks first
     assert bar.n_samples == p.source.n_samples and first.vertex in p.source.samples
 

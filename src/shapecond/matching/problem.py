@@ -181,7 +181,8 @@ class MatchProblem:
     @cached_property
     def sample_map(self) -> SampleMatch | None:
         """The map between the samples, landmark pairs fixed and the landmarks' sides read
-        (``pipeline.match_samples``, ``pipeline.sample_sides``); None for the zoomout matcher."""
+        (``pipeline.match_samples``, ``pipeline.sample_sides``): LH05 on the N samples is the matching of
+        the paper's evaluation (Section 7), FAQ the seeded alternative; None for the zoomout matcher."""
         if self.target is None:
             return None
         source, target, lt = self.source, self.target, self._target_landmarks
