@@ -168,10 +168,11 @@ class MatchProblem:
         zoomout matcher, which samples no target."""
         return self._carried[0]
 
-    @cached_property
     def solvers(self) -> tuple:
-        """(source, target) distance solvers: the given ones, or ``sampled.CachedSolver``s that know the
-        rows of ``source`` and ``target`` (what the bar reads the target's distances with)."""
+        """(source, target) distance solvers: the given ones, or new ``sampled.CachedSolver``s that know the
+        rows of ``source`` and ``target`` (what the bar reads the target's distances with).  New ones are
+        made on each call and not kept: a problem kept by a result (``MatchResult.problem``) holds no
+        factorisation and no rows beyond its samples'."""
         if self._solvers is not None:
             return self._solvers
         o = self.options
@@ -239,24 +240,20 @@ class MatchProblem:
         return self.dense_match.vertex_map
 
     @cached_property
-    def _bar_target_solver(self):
-        return self.solvers[1]
-
-    @cached_property
     def epsilon_hat(self) -> float:
         """ε̂, the map's RMS distortion on the bar's samples (``error_bar.map_distortion``; sqrt(area) units):
         the level a deformation is read at (``api.level``); the error bar's when it is computed."""
         if "_bar" in self.__dict__:
             return self._bar[0].epsilon_hat
         coarse = bar_surface(self.source, self.n_landmarks)
-        return map_distortion(coarse, self.target_geometry, self.vertex_map[coarse.samples], self._bar_target_solver)
+        return map_distortion(coarse, self.target_geometry, self.vertex_map[coarse.samples], self.solvers()[1])
 
     @cached_property
     def _bar(self) -> tuple[ErrorBar, SampledSurface, np.ndarray]:
         """(ErrorBar, the bar's samples, the target's distances between their images): the dense map's bar
         on the first ``BAR_SAMPLES`` samples of ``source`` (``error_bar.bar_and_samples``), no new samples."""
         return bar_and_samples(self.source, self.target_geometry, self.vertex_map, self.n_landmarks,
-                               self.options.seed, self._bar_target_solver)
+                               self.options.seed, self.solvers()[1])
 
     @property
     def error_bar(self) -> ErrorBar:
