@@ -9,7 +9,7 @@ Usage:
 layouts) matched to each of its first targets with ``--landmarks`` farthest-point
 samples of the null shape as landmarks and their images through the ground truth
 (``evaluation.protocols.landmark_images``), every matcher
-(``matching.pipeline.match_surfaces`` / ``match_landmarks_only``, as ``evaluate``
+(``matching.problem.match_surfaces`` / ``pipeline.match_landmarks_only``, as ``evaluate``
 calls them), and the dense stage alone started from the *true* map (every source
 vertex sent where the ground truth sends its nearest reference point): what the
 refinement keeps of a perfect start is the floor every matcher meets.  Errors at
@@ -38,8 +38,8 @@ from _releases import truth_start  # noqa: E402
 def _pair(cls, null, src, ref_s, target_path, a) -> dict:
     from shapecond.api import load
     from shapecond.evaluation import protocols as P
-    from shapecond.matching.pipeline import (MatchOptions, anchors_of, dense_stage, match_landmarks_only,
-                                             match_surfaces)
+    from shapecond.matching.pipeline import MatchOptions, anchors_of, dense_stage, match_landmarks_only
+    from shapecond.matching.problem import match_surfaces
     from shapecond.matching.sampled import CachedSolver, insert_landmarks, sample_surface, surface_unit
 
     g = load(target_path)

@@ -46,7 +46,8 @@ def _pair(g, src, ref_s, target_path, n_landmarks: int) -> dict:
     from shapecond.api import load
     from shapecond.evaluation import protocols as P
     from shapecond.matching import zoomout as Z
-    from shapecond.matching.pipeline import MatchOptions, anchors_of, dense_stage, match_shapes
+    from shapecond.matching.pipeline import MatchOptions, anchors_of, dense_stage
+    from shapecond.matching.problem import match_shapes
     from shapecond.matching.sampled import CachedSolver, sample_surface, surface_unit
 
     tgt = load(target_path)

@@ -68,7 +68,8 @@ def _refine(src, tgt, start, anchors, variant):
 def run(a) -> None:
     from shapecond.api import load
     from shapecond.evaluation.protocols import _reference_ids, landmark_images, reference_errors
-    from shapecond.matching.pipeline import MatchOptions, anchors_of, match_shapes
+    from shapecond.matching.pipeline import MatchOptions, anchors_of
+    from shapecond.matching.problem import match_shapes
     from shapecond.matching.sampled import CachedSolver, surface_unit
 
     lms = landmark_sets(a.landmarks)

@@ -48,7 +48,8 @@ def _refine(null, g, start, anchors, schedule):
 
 def _pair(null, g, ref_s, ref_t, src, ids, truth):
     from shapecond.evaluation import protocols as P
-    from shapecond.matching.pipeline import MatchOptions, anchors_of, match_surfaces
+    from shapecond.matching.pipeline import MatchOptions, anchors_of
+    from shapecond.matching.problem import match_surfaces
     from shapecond.matching.sampled import CachedSolver, sample_surface, surface_unit
 
     tgt = sample_surface(g, 400, "heat", 0, cache=True)

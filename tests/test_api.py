@@ -251,7 +251,7 @@ def test_the_zoomout_dense_stage_is_in_the_estimate_before_any_work(monkeypatch)
     import warnings
 
     import shapecond.limits as limits
-    from shapecond.matching import pipeline
+    from shapecond.matching.problem import MatchProblem
 
     sizes = [2_562, 10_242, 40_962, 163_842]
     dense = [limits.dense_stage_seconds(n, n) for n in sizes]
@@ -261,10 +261,7 @@ def test_the_zoomout_dense_stage_is_in_the_estimate_before_any_work(monkeypatch)
     def no_work(*args, **kwargs):
         raise AssertionError("matching started before the cost check")
 
-    import shapecond.api.matching as api_matching
-
-    monkeypatch.setattr(pipeline, "match_shapes", no_work)
-    monkeypatch.setattr(api_matching, "match_shapes", no_work)  # the name the API calls
+    monkeypatch.setattr(MatchProblem, "dense_match", property(no_work))  # the first work of a match
     monkeypatch.setattr(limits, "WARN_SECONDS", 10.0)
     shape = "demo:sphere:subdivisions=2"
     with pytest.raises(AssertionError, match="before the cost check"), warnings.catch_warnings(record=True) as said:
@@ -281,7 +278,7 @@ def test_the_zoomout_dense_stage_is_in_the_estimate_before_any_work(monkeypatch)
 def test_lh05s_affinity_is_in_the_estimate_and_refused_before_the_geodesics(monkeypatch):
     """match cat0 cat0 -n 5000 warned '2 min', computed 33 s at 3.5 GB, then LH05 refused a 37 GB matrix."""
     from shapecond.limits import lh05_affinity_bytes
-    from shapecond.matching import pipeline
+    from shapecond.matching.problem import MatchProblem
     from shapecond.matching.spectral import MAX_AFFINITY_BYTES
 
     assert lh05_affinity_bytes(5000, 1) / 2**30 == pytest.approx(37.2, abs=0.1)
@@ -289,7 +286,7 @@ def test_lh05s_affinity_is_in_the_estimate_and_refused_before_the_geodesics(monk
     def no_work(*args, **kwargs):
         raise AssertionError("matching started before the cost check")
 
-    monkeypatch.setattr(pipeline, "match_shapes", no_work)
+    monkeypatch.setattr(MatchProblem, "dense_match", property(no_work))
     big = "demo:sphere:subdivisions=6"
     for force in (False, True):  # the matcher refuses beyond its limit whatever force says
         with pytest.raises(sc.TooLargeError, match="37.2 GB"):

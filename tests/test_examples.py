@@ -10,7 +10,7 @@ import shapecond
 
 MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.settings",
            "shapecond.api.matching", "shapecond.api.level", "shapecond.api.collection",
-           "shapecond.evaluation.run", "shapecond.checks", "shapecond.jsonable", "shapecond.output",
+           "shapecond.matching.problem", "shapecond.evaluation.run", "shapecond.checks", "shapecond.jsonable", "shapecond.output",
            "shapecond.symmetry.verdict"]
 
 

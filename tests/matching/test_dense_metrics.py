@@ -5,7 +5,8 @@ import pytest
 
 from shapecond.errors import InputError
 from shapecond.matching.metrics import cumulative_curve, errors_from_rows, normalise, summary
-from shapecond.matching.pipeline import MatchOptions, match_shapes
+from shapecond.matching.pipeline import MatchOptions
+from shapecond.matching.problem import match_shapes
 from shapecond.matching.sampled import insert_landmarks, sample_surface
 from shapecond.shapes.validate import make_geometry
 from shapecond.shapes.synthetic import plane_patch

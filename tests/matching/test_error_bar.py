@@ -9,7 +9,7 @@ from scipy.spatial.distance import cdist
 
 from shapecond.errors import InputError
 from shapecond.matching import error_bar as eb
-from shapecond.matching.error_bar import (bar_surface, dense_error_bar, error_bar, map_distortion,
+from shapecond.matching.error_bar import (bar_and_samples, bar_surface, error_bar, map_distortion,
                                          sample_map_bar)
 from shapecond.matching.sampled import sample_surface
 from shapecond.shapes.synthetic import bumpy_blob
@@ -76,11 +76,12 @@ def test_error_bar_is_delta_at_the_maps_own_level_with_its_witness():
 def test_the_right_map_of_a_shape_onto_itself_has_no_distortion_and_a_bar_at_delta_zero():
     g = bumpy_blob(subdivisions=3)
     src = sample_surface(g, 40, landmarks=[5, 60, 200], cache=False)
-    bar, field = dense_error_bar(src, g, np.arange(g.n_vertices), 3)
+    bar, coarse, _ = bar_and_samples(src, g, np.arange(g.n_vertices), 3)
+    field = bar.doubt[coarse.nearest]
     assert bar.epsilon_hat == pytest.approx(0.0, abs=1e-6)
     assert bar.delta == pytest.approx(scale_score(src.D, 40, [0, 1, 2], 0.0, effort="quick").displacement, abs=1e-9)
     assert field.shape == (g.n_vertices,) and not field.any()  # no doubt at any vertex
-    worse, _ = dense_error_bar(src, g, np.roll(np.arange(g.n_vertices), 7), 3)   # a scrambled map
+    worse, _, _ = bar_and_samples(src, g, np.roll(np.arange(g.n_vertices), 7), 3)   # a scrambled map
     assert worse.epsilon_hat > bar.epsilon_hat and worse.delta >= bar.delta
 
 
@@ -91,9 +92,8 @@ def test_the_bar_uses_the_first_samples_with_every_landmark_and_its_field_reache
     coarse = bar_surface(src, 3)
     assert np.array_equal(coarse.samples, src.samples[:12]) and np.array_equal(coarse.rows, src.rows[:12])
     assert bar_surface(src, 30).n_samples == 30             # never fewer samples than landmarks
-    bar, field = dense_error_bar(src, g, np.roll(np.arange(g.n_vertices), 7), 3)
-    assert bar.n_samples == 12 and bar.doubt.shape == (12,)
-    assert np.array_equal(field, bar.doubt[coarse.nearest])  # each vertex takes its nearest bar sample's doubt
+    bar, used, _ = bar_and_samples(src, g, np.roll(np.arange(g.n_vertices), 7), 3)
+    assert bar.n_samples == 12 and bar.doubt.shape == (12,) and np.array_equal(used.samples, coarse.samples)
     assert bar.epsilon_hat == pytest.approx(map_distortion(coarse, g, np.roll(np.arange(g.n_vertices), 7)[coarse.samples]))
 
 

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from shapecond.errors import InputError
+from shapecond.matching.problem import truth_errors
 from shapecond.shapes.io import load_geometry, write_mesh
 from shapecond.shapes.synthetic import sphere
-from shapecond.viz import pages
 from shapecond.viz import truth as viz_truth
 from tests.helpers import deadline, run_cli
 
@@ -69,7 +69,7 @@ def test_reference_truth_is_known_at_the_reference_vertices_only(pair):
     full = viz_truth.truth_map(viz_truth.read_truth(str(d / "truth.txt")), src, tgt)
     assert np.array_equal(np.flatnonzero(t >= 0), ref) and np.array_equal(t[ref], full[ref])
     wrong = np.where(np.arange(len(inv)) % 2 == 0, full, np.roll(full, 5))
-    _, err, samples = pages.match_errors(src, tgt, wrong, t)
+    err, samples = truth_errors(src, tgt, wrong, t)
     assert set(samples.tolist()) <= set(ref.tolist()) and len(samples) == len(ref)
     right = wrong[samples] == t[samples]
     assert right.any() and (~right).any() and np.all(err[right] == 0) and np.all(err[~right] > 0)

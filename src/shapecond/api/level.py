@@ -28,9 +28,8 @@ import numpy as np
 from ..checks import parse_ids
 from ..errors import InputError
 from ..jsonable import jsonable
-from ..matching.error_bar import bar_surface, map_distortion
 from .inputs import DEFAULT_POINTS, load
-from .matching import _bar_inputs, _inputs, _match_options, _match_pair
+from .matching import load_pair, match_options, pair_problem
 
 
 #: Shapes matched to the first one of a collection to read its level (``collection_level``).
@@ -102,7 +101,7 @@ def deformation_level(x, others, *, landmarks=(), landmarks_others=None, matcher
         raise InputError(f"deformation_level() got unknown option {refused[0]!r}")
     if matcher == "zoomout":
         raise InputError("the level is read off a sample matcher's map: matcher 'faq' or 'lh05', not 'zoomout'")
-    opts, flags = _match_options(matcher, n_points, "nearest", "fps", dict(options))
+    opts, flags = match_options(matcher, n_points, "nearest", "fps", dict(options))
     others = list(others) if isinstance(others, list) else [others]
     if not others:
         raise InputError("deformation_level needs at least one other shape")
@@ -143,15 +142,13 @@ def collection_level(shapes: list, **options) -> DeformationLevel:
 
 
 def _pair_level(x, y, ids_s, ids_t, opts, flags) -> tuple[float, float]:
-    """(ε̂ in sqrt(area) units, the geodesic diameter of ``x`` in the same units) of one matched pair."""
-    src, tgt = _inputs(x, y, ids_s, ids_t, flags)
+    """(ε̂ in sqrt(area) units, the geodesic diameter of ``x`` in the same units) of one matched pair
+    (``matching.problem.MatchProblem.epsilon_hat``, on the samples the matcher used)."""
+    src, tgt = load_pair(x, y, flags)
     if isinstance(src, np.ndarray) or isinstance(tgt, np.ndarray):
         raise InputError("the deformation level is read off meshes or point clouds, not distance matrices")
-    m = _match_pair(src, tgt, ids_s, ids_t, opts, flags["force"])
-    source, solver = _bar_inputs(m, src, tgt, src.to_internal(ids_s), opts)
-    coarse = bar_surface(source, len(ids_s))
-    eps = map_distortion(coarse, tgt, m.vertex_map[coarse.samples], solver)
-    return eps, source.diameter / source.unit
+    problem = pair_problem(src, tgt, ids_s, ids_t, opts, flags["force"])
+    return problem.epsilon_hat, problem.source.diameter / problem.source.unit
 
 
 def _level(pairs, matcher: str, seconds: float) -> DeformationLevel:

@@ -1,17 +1,16 @@
-"""Landmark-guided matching of two shapes through the Python interface (``matching.pipeline``)."""
+"""Landmark-guided matching of two shapes through the Python interface (``matching.problem.MatchProblem``)."""
 
 from __future__ import annotations
 
 from dataclasses import fields
-from functools import partial
 
 import numpy as np
 
 from ..checks import check_choice, check_flag, check_int, check_seed, parse_ids
 from ..errors import InputError
-from ..matching.error_bar import bar_and_samples
-from ..matching.pipeline import MATCHERS, MatchOptions, match_samples, match_shapes
-from ..matching.sampled import CachedSolver, sample_surface
+from ..matching.candidates import check_landmarks
+from ..matching.pipeline import MATCHERS, MatchOptions, match_samples
+from ..matching.problem import MatchProblem
 from ..matching.seeded import FAQOptions
 from ..matching.spectral import LH05Options
 from ..matching.suggest import suggest_landmarks
@@ -43,8 +42,9 @@ def _matcher_options(matcher: str, options: dict, seed: int):
     return declared(**options, **({"seed": seed} if declared is FAQOptions else {}))
 
 
-def _match_options(matcher, n_points, dense, samples, options: dict):
-    """``MatchOptions`` and the load settings from ``match``'s keywords (each checked once)."""
+def match_options(matcher, n_points, dense, samples, options: dict):
+    """``MatchOptions`` and the load settings from ``match``'s keywords (each checked once; ``options`` is
+    emptied of them, and of the matcher's own options)."""
     settings = {k: options.pop(k, v) for k, v in _SETTINGS.items()}
     seed = check_seed(settings["seed"])
     if "k" in options:
@@ -69,10 +69,7 @@ def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
     if opts.matcher == "zoomout":
         raise InputError("the zoomout matcher needs two meshes or point clouds (a Laplace-Beltrami basis), "
                          "not distance matrices")
-    for name, ids, D in (("source", ids_s, src), ("target", ids_t, tgt)):
-        bad = [v for v in ids if v >= D.shape[0]]
-        if bad:
-            raise InputError(f"{name} landmark {bad[0]} is out of range (rows 0..{D.shape[0] - 1})")
+    check_landmarks(src.shape[0], tgt.shape[0], ids_s, ids_t)
     if tgt.shape[0] < src.shape[0]:
         raise InputError(f"the target matrix has fewer rows ({tgt.shape[0]}) than the source ({src.shape[0]})")
     sm = match_samples(src / src.max(), tgt / tgt.max(), ids_s, ids_t, opts.matcher_options)
@@ -118,13 +115,14 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     True
     """
     options = dict(options)
-    opts, flags = _match_options(matcher, n_points, dense, options.pop("samples", "fps"), options)
+    opts, flags = match_options(matcher, n_points, dense, options.pop("samples", "fps"), options)
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
-    src, tgt = _inputs(source, target, ids_s, ids_t, flags)
+    src, tgt = load_pair(source, target, flags)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
     if isinstance(src, np.ndarray) or isinstance(tgt, np.ndarray):
         return _match_matrices(src, tgt, ids_s, ids_t, opts, summary)
-    m = _match_pair(src, tgt, ids_s, ids_t, opts, flags["force"])
+    problem = pair_problem(src, tgt, ids_s, ids_t, opts, flags["force"])
+    m = problem.dense_match
     lines = np.full(int(src.ids.max()) + 1, -1, dtype=np.int64)
     lines[src.ids] = tgt.ids[m.vertex_map]
     summary.update(n_points=opts.n_points, n_source_vertices=int(src.n_vertices),
@@ -132,46 +130,30 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
                    samples=opts.samples, matcher_info=m.sample_map.info if m.sample_map is not None else {})
     if opts.samples == "same-ids":
         summary.update(sample_error=m.info["sample_error"], exact=m.info["exact"])
-    doubt, advice = None, None
+    doubt = None
     if flags["error_bar"]:
-        bar, coarse, Dt = _error_bar(m, src, tgt, src.to_internal(ids_s), opts)
-        summary["error_bar"] = bar.to_dict()
+        summary["error_bar"] = problem.error_bar.to_dict()
         doubt = np.full(lines.size, np.nan)
-        doubt[src.ids] = bar.doubt[coarse.nearest]
-        advice = partial(suggest_landmarks, coarse, Dt, bar, len(ids_s), m.vertex_map, tgt.ids, seed=opts.seed)
-    result = MatchResult(lines, summary, (src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t)), doubt, advice)
+        doubt[src.ids] = problem.doubt
+    result = MatchResult(lines, summary, (src, tgt, problem.landmarks_source, problem.landmarks_target), doubt,
+                         problem.suggest if flags["error_bar"] else None, problem)
     if flags["suggest"]:
         result.suggest(flags["suggest"])  # recorded in the summary
     return result
 
 
-def _inputs(source, target, ids_s, ids_t, flags):
-    """The two loaded inputs of a matching, once their landmark counts agree."""
-    if len(ids_s) != len(ids_t):
-        raise InputError(f"landmark counts differ: {len(ids_s)} on the source, {len(ids_t)} on the target")
+def load_pair(source, target, flags: dict) -> tuple:
+    """The two inputs of a matching, loaded with ``match``'s load settings (``match_options``)."""
     largest, force = flags["largest_component"], flags["force"]
     return load(source, largest_component=largest, force=force), load(target, largest_component=largest, force=force)
 
 
-def _match_pair(src, tgt, ids_s, ids_t, opts, force):
-    """``matching.pipeline.match_shapes`` of two loaded shapes, guarded (``guards.guard_match``)."""
+def pair_problem(src, tgt, ids_s, ids_t, opts: MatchOptions, force: bool) -> MatchProblem:
+    """The ``matching.problem.MatchProblem`` of two loaded shapes and their landmarks (input ids), its
+    landmark pairs checked, then its cost (``guards.guard_match``), before any work."""
+    problem = MatchProblem(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), opts)
     guard_match(max(src.n_vertices, tgt.n_vertices), opts.n_points, len(ids_s), opts, force)
-    return match_shapes(src, tgt, src.to_internal(ids_s), tgt.to_internal(ids_t), opts)
-
-
-def _bar_inputs(m, src, tgt, landmarks, opts):
-    """The matcher's source samples (sampled here when it has none: the zoomout matcher with 3
-    landmarks) and the target's distance solver: what ``matching.error_bar`` reads a map's distortion
-    with."""
-    source = m.source if m.source is not None else sample_surface(src, opts.n_points, opts.backend, opts.seed,
-                                                                  landmarks, opts.cache)
-    return source, CachedSolver(tgt, opts.backend, m.target)
-
-
-def _error_bar(m, src, tgt, landmarks, opts):
-    """``matching.error_bar.bar_and_samples`` on the matcher's samples."""
-    source, solver = _bar_inputs(m, src, tgt, landmarks, opts)
-    return bar_and_samples(source, tgt, m.vertex_map, len(landmarks), opts.seed, solver)
+    return problem
 
 
 __all__ = ["match"]

@@ -258,8 +258,10 @@ class MatchResult(Pictures):
     drawing : (source Geometry, target Geometry, their landmarks as internal ids), for pictures.
     doubt : (n,) the error bar's doubt field at every source id (``matching.error_bar``; NaN for a
         dropped vertex), or None.
-    advice : callable k -> the k next landmarks (``matching.suggest.suggest_landmarks`` bound to this
-        match's bar), or None without an error bar; use ``suggest``.
+    advice : callable k -> the k next landmarks (``matching.problem.MatchProblem.suggest`` of this
+        match), or None without an error bar; use ``suggest``.
+    problem : the ``matching.problem.MatchProblem`` the map was read off (None for distance matrices):
+        what the page's error field is computed by (``MatchProblem.truth_errors``).
     """
 
     map: np.ndarray
@@ -267,6 +269,7 @@ class MatchResult(Pictures):
     drawing: tuple = field(default=None, repr=False)
     doubt: np.ndarray | None = field(default=None, repr=False)
     advice: object = field(default=None, repr=False)
+    problem: object = field(default=None, repr=False)
 
     def suggest(self, k: int = 1) -> list[dict]:
         """The ``k`` next landmarks of this match, in order (``matching.suggest``): each its source id,

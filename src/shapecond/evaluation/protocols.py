@@ -15,7 +15,7 @@ matcher, and the error of the map is measured on the target (``matching.metrics`
     objective against the true map's.  Shared vertex order only.
 ``"independent"`` — each target gets its own farthest-point samples, so no target
     sample is the true image of a source sample; the map is made dense
-    (``pipeline.match_surfaces``, with the dense stage) and its error is measured
+    (``problem.MatchProblem``, with the dense stage) and its error is measured
     at the target's N samples (the source vertex with the same id goes to
     ``p``; ``d_t(p, g)`` is read from the target's distance rows).  Shared
     vertex order only.
@@ -45,11 +45,10 @@ from ..errors import InputError
 from ..matching import refine
 from ..matching.candidates import recall
 from ..matching.metrics import errors_from_rows, normalise
-from ..matching.error_bar import dense_error_bar, sample_map_bar
-from ..matching.pipeline import (SAMPLE_MATCHERS, MatchOptions, match_landmarks_only, match_samples, sample_matcher_options,
-                                 match_surfaces, sample_sides)
-from ..matching.sampled import (CachedSolver, carry_samples, insert_landmarks, sample_surface, surface_at,
-                                surface_unit)
+from ..matching.error_bar import ErrorBar
+from ..matching.pipeline import SAMPLE_MATCHERS, MatchOptions
+from ..matching.problem import MatchProblem
+from ..matching.sampled import CachedSolver, sample_surface, surface_at, surface_unit
 from ..matching.spectral import fine_kernel
 from ..shapes.geodesics import DistanceSolver
 from .datasets import ClassFolder, reference_symmetry
@@ -81,10 +80,13 @@ class MatchingSetup:
     shape: ShapeSetup = ShapeSetup()
     error_bars: bool = True
 
-    def options(self, matcher: str) -> MatchOptions:
+    def options(self, matcher: str, protocol: str = "independent") -> MatchOptions:
+        """The ``MatchOptions`` of ``matcher`` in ``protocol`` (the corresponding protocol's target has the
+        source's samples, ``samples="same-ids"``)."""
         s = self.shape
         return MatchOptions(matcher=matcher, n_points=s.n_points, backend=s.backend, seed=s.seed,
-                            dense=self.dense, cache=s.cache)
+                            dense=self.dense, samples="same-ids" if protocol == "corresponding" else "fps",
+                            cache=s.cache)
 
 
 def target_task(cls: ClassFolder, target_path, landmark_sets: dict, setup: MatchingSetup,
@@ -135,10 +137,12 @@ def _shared_order(cls, target_path, landmark_sets, setup, protocol, load) -> lis
     for method, c, matcher in _cells(landmark_sets, setup, matchers):
         lm = landmark_sets[method][:c]
         t0 = time.perf_counter()
+        problem = MatchProblem(source.geometry, g, lm, lm, setup.options(matcher, protocol), surfaces=(source, tgt),
+                               solvers=solvers)
         if protocol == "corresponding":
-            raw, raw_s, extra = _corresponding_cell(source, g, lm, matcher, solvers, s.seed, setup.error_bars)
+            raw, raw_s, extra = _corresponding_cell(problem, setup.error_bars)
         else:
-            raw, raw_s, extra = _independent_cell(source, tgt, lm, setup.options(matcher), solvers, setup.error_bars)
+            raw, raw_s, extra = _independent_cell(problem, tgt, setup.error_bars)
         err = normalise(raw, 2 * half)
         out.append(MatchRecord(
             cls.name, g.name, method, c, matcher, float(err.mean()),
@@ -148,16 +152,14 @@ def _shared_order(cls, target_path, landmark_sets, setup, protocol, load) -> lis
     return out
 
 
-def _corresponding_cell(source, g, lm, matcher, solvers, seed, bars: bool = True):
-    src, ls = insert_landmarks(source, lm, solvers[0])
-    carried, truth = carry_samples(src, g, solvers[1], seed)
-    options = replace(sample_matcher_options(matcher, seed), sides=sample_sides(src, ls, carried, truth[ls]))
-    sm = match_samples(src.D, carried.D, ls, truth[ls], options)
-    raw = errors_from_rows(carried.rows[truth], carried.samples[sm.t])
+def _corresponding_cell(problem: MatchProblem, bars: bool = True):
+    """Errors of the sample map at the samples carried to the target (``MatchProblem.sample_map_errors``),
+    and the exact fraction, LH05's recall and objective ratio and the sample map's bar."""
+    sm, truth, src, carried = problem.sample_map, problem.sample_truth, problem.source, problem.target
+    raw = problem.sample_map_errors
     extra = {"exact": float(np.mean(sm.t == truth))}
     if bars:
-        bar = sample_map_bar(src, carried, sm.t, len(ls), seed)
-        extra.update(epsilon_hat=bar.epsilon_hat, bar=bar.bar)
+        extra.update(_bar_columns(problem.sample_bar))
     if sm.candidates is not None:
         extra["recall"] = recall(sm.candidates, truth)
     if "h" in sm.info:
@@ -166,23 +168,17 @@ def _corresponding_cell(source, g, lm, matcher, solvers, seed, bars: bool = True
     return raw, raw, extra
 
 
-def _independent_cell(source, tgt, lm, options: MatchOptions, solvers, bars: bool = True):
-    if options.matcher in SAMPLE_MATCHERS:
-        m = match_surfaces(source, tgt, lm, lm, options, solvers)
-        raw_s = errors_from_rows(m.target.rows[m.sample_map.t], m.source.samples)
-    else:
-        m = match_landmarks_only(source.geometry, tgt.geometry, lm, lm, options, solvers)
-        raw_s = None
-    # evaluation points: the target's own samples (same ids on the source)
+def _independent_cell(problem: MatchProblem, tgt, bars: bool = True):
+    """Errors of the dense map at the target's own samples ``tgt`` (the source vertex with the same id
+    goes to each), of the sample map at the source's samples, and the dense map's bar."""
+    m = problem.dense_match
+    raw_s = None if m.sample_map is None else errors_from_rows(m.target.rows[m.sample_map.t], m.source.samples)
     return (errors_from_rows(tgt.rows, m.vertex_map[tgt.samples]), raw_s,
-            bar_fields(m, source, tgt.geometry, lm, solvers, options.seed) if bars else {})
+            _bar_columns(problem.error_bar) if bars else {})
 
 
-def bar_fields(m, source, target_geometry, landmarks, solvers, seed) -> dict:
-    """``epsilon_hat`` and ``bar`` of a dense map (``matching.error_bar.dense_error_bar``, sqrt(area) units),
-    on the matcher's samples, or on ``source`` with the landmarks inserted first (the zoomout matcher)."""
-    surface = m.source if m.source is not None else insert_landmarks(source, landmarks, solvers[0])[0]
-    bar, _ = dense_error_bar(surface, target_geometry, m.vertex_map, len(landmarks), seed, solvers[1])
+def _bar_columns(bar: ErrorBar) -> dict:
+    """The record's ``epsilon_hat`` and ``bar`` of an error bar (sqrt(area) units)."""
     return {"epsilon_hat": bar.epsilon_hat, "bar": bar.bar}
 
 
@@ -288,12 +284,9 @@ def _remeshed(cls, target_path, landmark_sets, setup: MatchingSetup, load) -> li
         method, c, matcher = cell
         t0 = time.perf_counter()
         ls, lt = landmark_sets[method][:c], images[method][:c]
-        if matcher in SAMPLE_MATCHERS:
-            m = match_surfaces(src, tgt, ls, lt, setup.options(matcher), solvers)
-        else:
-            m = match_landmarks_only(null, g, ls, lt, setup.options(matcher), solvers)
-        maps[cell], seconds[cell] = m.vertex_map[ref_s], time.perf_counter() - t0
-        bars[cell] = bar_fields(m, src, g, ls, solvers, s.seed) if setup.error_bars else {}
+        problem = MatchProblem(null, g, ls, lt, setup.options(matcher), surfaces=(src, tgt), solvers=solvers)
+        maps[cell], seconds[cell] = problem.vertex_map[ref_s], time.perf_counter() - t0
+        bars[cell] = _bar_columns(problem.error_bar) if setup.error_bars else {}
     mirror_t = _mirror_images(cls, target_path, g, ref_t)
     raw, diameter, mirror = reference_errors(g, ref_t, maps, s.backend, mirror_t)
     unit = surface_unit(g, diameter)

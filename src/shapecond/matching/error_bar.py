@@ -232,9 +232,10 @@ def sample_map_bar(source: SampledSurface, target: SampledSurface, sample_map, n
                      epsilon_landmarks=landmark_distortion(Ds, Dt, n_landmarks))
 
 
-def dense_error_bar(source: SampledSurface, target_geometry, vertex_map, n_landmarks: int, seed: int = 0,
-                    solver=None) -> tuple[ErrorBar, np.ndarray]:
-    """The error bar of a dense map and its doubt field on every source vertex.
+def bar_and_samples(source: SampledSurface, target_geometry, vertex_map, n_landmarks: int, seed: int = 0,
+                    solver=None) -> tuple[ErrorBar, SampledSurface, np.ndarray]:
+    """The error bar of a dense map, with the samples it was computed on and the target's distances between
+    their images (what ``suggest`` reads the next landmark off, without a new geodesic).
 
     Parameters
     ----------
@@ -243,20 +244,15 @@ def dense_error_bar(source: SampledSurface, target_geometry, vertex_map, n_landm
     target_geometry : Geometry of the target.
     vertex_map : (n_source,) internal target vertex of every source vertex.
     n_landmarks : the landmarks among the first samples of ``source``.
+    seed : of the δ search.
     solver : the target's distance solver, to reuse its rows.
 
     Returns
     -------
-    (ErrorBar, (n_source,) doubt of every source vertex from its nearest bar sample, sqrt(area) units)
+    (ErrorBar, the bar's SampledSurface, (n, n) the target's distances between the images of its samples,
+    sqrt(area) units).  The doubt of a source vertex is that of its nearest bar sample,
+    ``bar.doubt[coarse.nearest]`` (``problem.MatchProblem.doubt``).
     """
-    bar, coarse, _ = bar_and_samples(source, target_geometry, vertex_map, n_landmarks, seed, solver)
-    return bar, bar.doubt[coarse.nearest]
-
-
-def bar_and_samples(source: SampledSurface, target_geometry, vertex_map, n_landmarks: int, seed: int = 0,
-                    solver=None) -> tuple[ErrorBar, SampledSurface, np.ndarray]:
-    """``dense_error_bar``'s bar with the samples it was computed on and the target's distances between
-    their images (what ``suggest`` reads the next landmark off, without a new geodesic)."""
     t0 = time.perf_counter()
     coarse = bar_surface(source, n_landmarks)
     Ds, Dt = coarse.D, _sample_distances(coarse, target_geometry, np.asarray(vertex_map)[coarse.samples], solver)

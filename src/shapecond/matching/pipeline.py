@@ -1,4 +1,4 @@
-"""Landmark-guided matching of two shapes, end to end, source to target.
+"""The stages of landmark-guided matching, source to target (``problem.MatchProblem`` runs them for a pair).
 
     geometry -> sampled surface (FPS, landmarks first) -> sample map (LH05 or FAQ)
              -> dense map (one target vertex per source vertex)
@@ -49,12 +49,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from shapecond.errors import InputError
-from shapecond.matching.dense import DENSE_METHODS, dense_map
+from shapecond.matching.dense import DENSE_METHODS
 from shapecond.matching.error_bar import BAR_SAMPLES, map_distortion
 from shapecond.matching.orientation import orientation_features
-from shapecond.matching.metrics import errors_from_rows, normalise
-from shapecond.matching.sampled import (CachedSolver, SampledSurface, carry_samples, insert_landmarks,
-                                        sample_surface, surface_unit)
+from shapecond.matching.sampled import CachedSolver, SampledSurface, sample_surface, surface_unit
 from shapecond.matching.seeded import FAQOptions, faq_match
 from shapecond.matching.spectral import LH05Options, SampleMatch, lh05_match
 from shapecond.matching.zoomout import Anchors, ZoomOutOptions, anchor_width, nearest_rows, zoomout
@@ -63,7 +61,7 @@ from shapecond.shapes.laplace import laplace_basis
 #: Matchers: two on samples (then extended and refined), one from the landmarks alone.
 MATCHERS = ("lh05", "faq", "zoomout")
 SAMPLE_MATCHERS = ("lh05", "faq")
-#: Which samples the target gets (``match_shapes``): its own FPS samples, or the source's vertex ids.
+#: Which samples the target gets (``problem.MatchProblem``): its own FPS samples, or the source's vertex ids.
 SAMPLINGS = ("fps", "same-ids")
 #: How the map reaches every vertex: the dense stage (default) or one of the plain extensions.
 DENSE_STAGES = ("zoomout",) + DENSE_METHODS
@@ -73,7 +71,7 @@ MIN_ZOOMOUT_LANDMARKS = 3
 
 @dataclass(frozen=True)
 class MatchOptions:
-    """How two shapes are matched (``match_shapes``).
+    """How two shapes are matched (``problem.MatchProblem``).
 
     Attributes
     ----------
@@ -118,7 +116,7 @@ class MatchOptions:
 
 @dataclass(frozen=True, eq=False)
 class DenseMatch:
-    """Result of ``match_shapes`` / ``match_surfaces``.
+    """A dense map and what it was made from (``problem.MatchProblem.dense_match``).
 
     Attributes
     ----------
@@ -149,11 +147,14 @@ def match_samples(D_source, D_target, landmarks_source, landmarks_target,
     return matcher(D_source, D_target, landmarks_source, landmarks_target, options)
 
 
-def anchors_of(source: SampledSurface, target: SampledSurface, n_landmarks: int) -> Anchors:
-    """The first ``n_landmarks`` samples of two sampled surfaces (their landmark pairs) as anchors."""
+def anchors_of(source: SampledSurface, target: SampledSurface, n_landmarks: int, target_samples=None) -> Anchors:
+    """The landmark pairs of two sampled surfaces as anchors: the first ``n_landmarks`` samples of
+    ``source`` and, on ``target``, the samples ``target_samples`` (default: its first ``n_landmarks``;
+    the carried samples of ``samples="same-ids"`` are shuffled)."""
     L = int(n_landmarks)
-    return Anchors(source.samples[:L], target.samples[:L], source.rows[:L] / source.unit,
-                   target.rows[:L] / target.unit)
+    t = slice(0, L) if target_samples is None else np.asarray(target_samples, dtype=np.int64)
+    return Anchors(source.samples[:L], target.samples[t], source.rows[:L] / source.unit,
+                   target.rows[t] / target.unit)
 
 
 def dense_stage(source_geometry, target_geometry, initial, anchors: Anchors | None,
@@ -167,23 +168,6 @@ def dense_stage(source_geometry, target_geometry, initial, anchors: Anchors | No
     return zoomout(bs, bt, (source_geometry.vertices, target_geometry.vertices), initial, anchors, options.zoomout)
 
 
-def match_surfaces(source: SampledSurface, target: SampledSurface, landmarks_source, landmarks_target,
-                   options: MatchOptions = MatchOptions(), solvers=(None, None)) -> DenseMatch:
-    """Match two sampled surfaces whose landmark vertices (internal ids) are given.
-
-    Landmarks that are not samples yet are inserted (``sampled.insert_landmarks``,
-    with the optional ``solvers``, e.g. ``sampled.CachedSolver``, for their rows).
-    """
-    ls, lt = _landmark_pair(landmarks_source, landmarks_target)
-    source, ils = insert_landmarks(source, ls, solvers[0])
-    target, ilt = insert_landmarks(target, lt, solvers[1])
-    sm = match_samples(source.D, target.D, ils, ilt, options.sample_options(sample_sides(source, ils, target, ilt)))
-    vmap = _extend(source, target, sm.t, ls.size, options)
-    vmap[ls] = lt  # landmarks map exactly onto their images
-    return DenseMatch(vmap, sm, source, target, dict(matcher=options.matcher, dense=options.dense,
-                                                     n_landmarks=int(ls.size)))
-
-
 def sample_sides(source: SampledSurface, landmarks_source, target: SampledSurface, landmarks_target):
     """(source, target) sides of the landmark pairs at the samples (``orientation``; landmarks given as
     sample indices), or None for point clouds and fewer than 2 landmarks."""
@@ -192,42 +176,27 @@ def sample_sides(source: SampledSurface, landmarks_source, target: SampledSurfac
     return None if fs is None or ft is None else (fs[source.samples], ft[target.samples])
 
 
-def _extend(source: SampledSurface, target: SampledSurface, t, n_landmarks: int, options: MatchOptions):
-    if options.dense in DENSE_METHODS:
-        return dense_map(source, target, t, method=options.dense)
-    initial = dense_map(source, target, t, method="distances")
-    return dense_stage(source.geometry, target.geometry, initial, anchors_of(source, target, n_landmarks), options)
-
-
-def _landmark_pair(landmarks_source, landmarks_target) -> tuple[np.ndarray, np.ndarray]:
-    ls = np.asarray(landmarks_source, dtype=np.int64).reshape(-1)
-    lt = np.asarray(landmarks_target, dtype=np.int64).reshape(-1)
-    if ls.size != lt.size:
-        raise InputError(f"landmark counts differ: {ls.size} on the source, {lt.size} on the target")
-    return ls, lt
-
-
 def match_landmarks_only(source_geometry, target_geometry, landmarks_source, landmarks_target,
-                         options: MatchOptions = MatchOptions(matcher="zoomout"), solvers=(None, None)) -> DenseMatch:
+                         options: MatchOptions = MatchOptions(matcher="zoomout"), solvers=(None, None),
+                         compared: SampledSurface | None = None) -> DenseMatch:
     """The zoomout matcher (module docstring): from the landmark pairs alone to a dense map.
 
-    ``solvers``: optional distance solvers of the two shapes (e.g. ``sampled.CachedSolver``)
-    for the landmarks' geodesic rows.
+    The landmark pairs (internal ids, at least ``MIN_ZOOMOUT_LANDMARKS``, distinct) are checked by
+    ``problem.MatchProblem``, which runs this matcher.  ``solvers``: optional distance solvers of the
+    two shapes (e.g. ``sampled.CachedSolver``) for the landmarks' geodesic rows; ``compared``: the
+    source's samples the starts are compared on (``comparison_samples``; sampled here when None).
     """
-    ls, lt = _landmark_pair(landmarks_source, landmarks_target)
-    if ls.size < MIN_ZOOMOUT_LANDMARKS:
-        raise InputError(f"the zoomout matcher needs at least {MIN_ZOOMOUT_LANDMARKS} landmark pairs, got {ls.size}")
+    ls = np.asarray(landmarks_source, dtype=np.int64).reshape(-1)
+    lt = np.asarray(landmarks_target, dtype=np.int64).reshape(-1)
     anchors = []
     for g, lm, solver in ((source_geometry, ls, solvers[0]), (target_geometry, lt, solvers[1])):
-        if lm.min() < 0 or lm.max() >= g.n_vertices or np.unique(lm).size != lm.size:
-            raise InputError(f"landmarks on {g.name} must be distinct vertices 0..{g.n_vertices - 1}")
         rows = (solver if solver is not None else CachedSolver(g, options.backend)).distances(lm)
         anchors.append(rows / surface_unit(g, float(rows.max())))
     anchor = Anchors(ls, lt, anchors[0], anchors[1])
     maps = [dense_stage(source_geometry, target_geometry, _nearest_description(source_geometry, target_geometry,
                                                                               anchor, k), anchor, options)
             for k in sorted({ls.size, MIN_ZOOMOUT_LANDMARKS})[::-1]]
-    best, compared = _least_distorted(source_geometry, target_geometry, maps, ls, options, solvers[1])
+    best, compared = _least_distorted(source_geometry, target_geometry, maps, ls, options, solvers[1], compared)
     return DenseMatch(maps[best], None, compared, None,
                       dict(matcher="zoomout", dense="zoomout", n_landmarks=int(ls.size),
                            start="every landmark" if best == 0 else f"the first {MIN_ZOOMOUT_LANDMARKS} landmarks"))
@@ -245,68 +214,21 @@ def _nearest_description(source_geometry, target_geometry, anchor: Anchors, k: i
     return nearest_rows(xs, xt)
 
 
+def comparison_samples(source_geometry, landmarks, options: MatchOptions) -> SampledSurface:
+    """The source's samples the zoomout matcher compares its starts on: as many as the error bar's
+    (``error_bar.BAR_SAMPLES``, or N if fewer), landmarks first; the bar reads the map on them."""
+    return sample_surface(source_geometry, min(options.n_points, BAR_SAMPLES), options.backend, options.seed,
+                          landmarks, options.cache)
+
+
 def _least_distorted(source_geometry, target_geometry, maps: list, landmarks, options: MatchOptions,
-                     solver) -> tuple[int, SampledSurface | None]:
+                     solver, compared: SampledSurface | None = None) -> tuple[int, SampledSurface | None]:
     """Index of the map that distorts the source's sample distances least (``error_bar.map_distortion`` on
-    as many samples as the error bar's, landmarks first; the first of equals), and those samples (None:
-    one map, nothing to compare)."""
+    ``compared``, by default ``comparison_samples``; the first of equals), and those samples (None: one
+    map, nothing to compare)."""
     if len(maps) == 1:
         return 0, None
-    src = sample_surface(source_geometry, min(options.n_points, BAR_SAMPLES), options.backend, options.seed,
-                         landmarks, options.cache)
+    src = compared if compared is not None else comparison_samples(source_geometry, landmarks, options)
     solver = solver if solver is not None else CachedSolver(target_geometry, options.backend)
     costs = [map_distortion(src, target_geometry, m[src.samples], solver) for m in maps]
     return int(np.argmin(costs)), src
-
-
-def match_shapes(source_geometry, target_geometry, landmarks_source, landmarks_target,
-                 options: MatchOptions = MatchOptions()) -> DenseMatch:
-    """Sample both shapes (landmarks first) and match them, source to target.
-
-    With ``options.samples == "same-ids"`` the two shapes share their vertex
-    order (a class of TOSCA, say) and the target is sampled at the source's
-    sample vertices (``sampled.carry_samples``, the evaluation's *corresponding*
-    protocol): the true sample map is known, and ``info`` reports its error
-    (``sample_error``, % of half the target's geodesic diameter) and the fraction
-    of samples matched exactly (``exact``).  The target landmarks must then be
-    the source's.
-
-    Parameters
-    ----------
-    source_geometry, target_geometry : Geometry
-    landmarks_source, landmarks_target : sequences of int
-        Internal vertex indices of corresponding landmarks (same count).
-    options : MatchOptions
-    """
-    ls, lt = _landmark_pair(landmarks_source, landmarks_target)
-    if options.matcher == "zoomout":
-        return match_landmarks_only(source_geometry, target_geometry, ls, lt, options)
-    n = min(source_geometry.n_vertices, target_geometry.n_vertices)
-    if options.n_points > n:
-        raise InputError(f"{options.n_points} samples requested but a shape has only {n} vertices")
-    src = sample_surface(source_geometry, options.n_points, options.backend, options.seed, ls, options.cache)
-    if options.samples == "same-ids":
-        return _match_same_ids(src, target_geometry, ls, lt, options)
-    tgt = sample_surface(target_geometry, options.n_points, options.backend, options.seed, lt, options.cache)
-    return match_surfaces(src, tgt, ls, lt, options)
-
-
-def _match_same_ids(src: SampledSurface, target_geometry, ls, lt, options: MatchOptions) -> DenseMatch:
-    """``match_shapes`` with the target sampled at the source's sample vertices."""
-    src, ils = insert_landmarks(src, ls)
-    tgt, truth = carry_samples(src, target_geometry, seed=options.seed)  # refuses different vertex ids
-    if not np.array_equal(ls, lt):
-        raise InputError("with same-ids samples the target landmarks must be the source's vertex ids")
-    sm = match_samples(src.D, tgt.D, ils, truth[ils], options.sample_options(sample_sides(src, ils, tgt, truth[ils])))
-    if options.dense in DENSE_METHODS:
-        vmap = dense_map(src, tgt, sm.t, method=options.dense)
-    else:  # the carried samples are shuffled: the landmark pairs are (src.samples[i], tgt.samples[truth[i]])
-        anchors = Anchors(src.samples[ils], tgt.samples[truth[ils]], src.rows[ils] / src.unit,
-                          tgt.rows[truth[ils]] / tgt.unit)
-        vmap = dense_stage(src.geometry, tgt.geometry, dense_map(src, tgt, sm.t), anchors, options)
-    vmap[ls] = lt
-    raw = errors_from_rows(tgt.rows[truth], tgt.samples[sm.t])
-    info = dict(matcher=options.matcher, dense=options.dense, n_landmarks=int(ls.size), samples="same-ids",
-                sample_error=float(normalise(raw, tgt.diameter).mean()),
-                exact=float(np.mean(sm.t == truth)))
-    return DenseMatch(vmap, sm, src, tgt, info)

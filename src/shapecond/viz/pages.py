@@ -26,9 +26,10 @@ import numpy as np
 
 from ..errors import InputError
 from ..jsonable import fmt
+from ..matching.problem import truth_errors
 from .html import MAX_DISPLAY_VERTICES, page, summary, table, viewer
 from .truth import truth_map
-from .scene import (DEFAULT_VIEWS, Colouring, HeatMapStyle, Place, colour_layer, guess_up, heatmap_scene,
+from .scene import (DEFAULT_VIEWS, Colouring, HeatMapStyle, Place, colour_layer, guess_up, heatmap_scene, idw,
                     landmark_scene, make_scene, position_colours, witness_scene)
 
 
@@ -130,48 +131,6 @@ def _pair(src, tgt, up=None):
     return a, b
 
 
-def match_errors(src, tgt, vmap, truth, n_points: int = 200, backend: str = "heat") -> tuple:
-    """Error field of a dense map (internal ids): per source vertex, % of half the target's diameter.
-
-    The geodesic distance on the target between the matched and the true vertex is
-    measured at ``n_points`` farthest-point samples (Euclidean FPS) of the source
-    vertices that have both a match and a true image (all of them for a complete
-    ground truth; the reference vertices for a truth of ``.vts`` files) and
-    interpolated between them as heat maps are (``viz.heatmap.idw``).  Returns
-    (field, errors at the samples, sample vertices).
-    """
-    from ..matching.metrics import errors_from_rows, normalise
-    from ..shapes.geodesics import DistanceSolver
-    from ..shapes.sampling import farthest_point_sampling
-    from .scene import idw
-
-    known = np.flatnonzero((vmap >= 0) & (truth >= 0))
-    if not known.size:
-        raise InputError("no source vertex has both a match and a ground-truth image")
-    solver = DistanceSolver(src, "euclidean")
-    if known.size < src.n_vertices:
-        solver = _Among(solver, known)
-    k = min(int(n_points), solver.n)
-    picked = np.asarray(farthest_point_sampling(solver, k, seed=0).samples, np.int64) if k >= 3 else np.arange(k)
-    samples = known[picked] if known.size < src.n_vertices else picked
-    rows = DistanceSolver(tgt, backend).distances(truth[samples])
-    raw = errors_from_rows(rows, vmap[samples])
-    err = normalise(raw, float(rows.max()) or 1.0)
-    return idw(np.asarray(src.vertices, float), samples, err), err, samples
-
-
-class _Among:
-    """A distance solver restricted to the vertices ``keep`` (rows and columns), for sampling among them."""
-
-    block = 1
-
-    def __init__(self, solver, keep):
-        self.solver, self.keep, self.n = solver, np.asarray(keep), len(keep)
-
-    def distances(self, sources):
-        return self.solver.distances(self.keep[np.atleast_1d(sources)])[:, self.keep]
-
-
 @dataclass(frozen=True)
 class MatchFields:
     """What a match page shows beyond the map.
@@ -180,6 +139,9 @@ class MatchFields:
     ----------
     truth : the ground truth, target internal index per source internal index (-1: none), for the
         error field; or None
+    errors : the map's errors against ``truth`` as ``matching.problem.MatchProblem.truth_errors`` computed
+        them (errors at the samples, % of half the target's diameter; their source internal indices), or
+        None: computed here from ``truth`` (``matching.problem.truth_errors``)
     doubt, doubt_text : the error bar's doubt field (sqrt(area) units per source internal index,
         ``matching.error_bar``) and its sentence; or None
     suggestions : points of the source worth fixing next, ((source internal index, label), ...) in order,
@@ -190,6 +152,7 @@ class MatchFields:
     """
 
     truth: np.ndarray | None = None
+    errors: tuple | None = None
     doubt: np.ndarray | None = None
     doubt_text: str = ""
     suggestions: tuple = ()
@@ -213,7 +176,8 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
     notes = []
     truth = fields.truth
     if truth is not None:
-        field, err, samples = match_errors(src, tgt, vmap, truth)
+        err, samples = fields.errors if fields.errors is not None else truth_errors(src, tgt, vmap, truth)
+        field = idw(np.asarray(src.vertices, float), samples, err)  # interpolated between the samples
         top = float(err.max()) if err.size else 1.0
         full = np.concatenate([field, np.full(tgt.n_vertices, np.nan)])
         name = "error, % of half the target's diameter"
@@ -487,6 +451,8 @@ def _match_result_page(result, o: PageOptions) -> str:
     ok = result.map[src.ids] >= 0
     vmap[ok] = tgt.to_internal(result.map[src.ids][ok])
     t = None if o.truth is None else truth_map(o.truth, src, tgt)
+    problem = getattr(result, "problem", None)  # the match's own: the errors computed once, by it
+    errors = None if t is None or problem is None else problem.truth_errors(t)
     s = result.summary
     lines = [f"{s.get('matcher')} map, {s.get('n_landmarks')} landmarks, N = {s.get('n_points')} samples"]
     doubt = None if result.doubt is None else result.doubt[src.ids]
@@ -494,7 +460,8 @@ def _match_result_page(result, o: PageOptions) -> str:
     if not suggestions and s.get("suggestions"):  # the match's own (``MatchResult.suggest``)
         suggestions = tuple((int(src.to_internal([p["source_id"]])[0]),
                              f"image {p['image_id']}, bar after it {p['bar_after']:.3g}") for p in s["suggestions"])
-    fields = MatchFields(t, doubt, s.get("error_bar", {}).get("text", ""), tuple(suggestions), o.command, o.up)
+    fields = MatchFields(t, errors, doubt, s.get("error_bar", {}).get("text", ""), tuple(suggestions), o.command,
+                         o.up)
     return match_page(src, tgt, vmap, ls, lt, fields=fields, lines=lines, title=o.title)
 
 
