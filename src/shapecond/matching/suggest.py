@@ -34,9 +34,14 @@ one took it to 0.055.  Ranking the doubtful samples by the bar expected after
 each (δ with the point fixed, warm-started from the bar's witness maps as CNBS's
 heat map does: the paper's greedy step at the pair's level) was no better:
 35/32/31 and 22/21/22 ×10⁻³ after +1/+2/+3 on the first two of those pairs,
-against 34/31/31 and 21/20/20 for the farthest point.  Where the doubt is broad
-(most maps between species) this is farthest-point sampling continued; where it
-is local (a swapped limb), the tip of the doubtful part.  Between species the
+against 34/31/31 and 21/20/20 for the farthest point; on TOSCA_r (8 test
+pairs, from 3 PLS landmarks) the bar after each of the 8 farthest doubtful
+samples chose among them no better than the farthest alone (19.1/18.0/15.6
+against 19.1/18.1/15.7 ×10⁻³ sqrt(area) after +1/+2/+3; another candidate was
+taken only where its bar after was lower by more than the samples'
+resolution).  Where the doubt is broad (most maps between species) this is
+farthest-point sampling continued; where it is local (a swapped limb), the tip
+of the doubtful part.  Between species the
 dense stage itself sets the floor: started from the *true* map with 9 landmarks
 it ends at 0.031 sqrt(area) on those pairs, so no choice of 3 more points takes
 a 6-landmark match (0.034) much lower.  ``gain`` reports what the point's cell
