@@ -59,6 +59,8 @@ NO_WORKER_TIMEOUT = 60.0
 POLL_SECONDS = 5.0
 _THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
                      "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS", "NUMBA_NUM_THREADS")
+#: What a Dask nanny writes into this process's environment (``_restore_environment``).
+_NANNY_VARIABLES = ("MALLOC_TRIM_THRESHOLD_", *_THREAD_VARIABLES)
 
 
 class WorkerDied(RuntimeError):
@@ -169,7 +171,11 @@ def runner(n_jobs=1, scheduler=None):
     if parsed is None:
         yield Runner(n_jobs, None, "this process" if n_jobs == 1 else f"{n_jobs} local processes")
         return
-    client, cluster = _client(*parsed)
+    saved = {name: os.environ.get(name) for name in _NANNY_VARIABLES}
+    try:
+        client, cluster = _client(*parsed)
+    finally:
+        _restore_environment(saved)
     try:
         n = check_workers(client)
         label = (f"a LocalCluster of {n} workers" if parsed[0] == "local"
@@ -180,6 +186,7 @@ def runner(n_jobs=1, scheduler=None):
             client.close()
         if cluster is not None:
             cluster.close()
+        _restore_environment(saved)  # a worker restarted during the run wrote them again
 
 
 def run_tasks(tasks, n_jobs=1, scheduler=None, progress=False, desc="tasks"):
@@ -208,6 +215,19 @@ def _outcome(f, *args, **kwargs):
         return f(*args, **kwargs), None
     except Exception as exc:  # noqa: BLE001 - reported per task
         return None, exc
+
+
+def _restore_environment(saved: dict) -> None:
+    """Put back the variables of ``_NANNY_VARIABLES`` as they were (``saved``, None: unset).  A Dask
+    nanny writes its workers' environment into this process's (``os.environ.update``) before it spawns
+    each worker; left there, the thread limits reach this process's own numba, which refuses a
+    ``NUMBA_NUM_THREADS`` changed after its threads started (an API user's next call would fail), and
+    the next cluster's nanny reads them first."""
+    for name, value in saved.items():
+        if value is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = value
 
 
 def _thread_env(n_jobs: int) -> dict:

@@ -120,8 +120,13 @@ def test_a_local_cluster_gives_its_workers_the_thread_share_and_no_malloc_trim(m
     # cluster's nanny reads them first: start from an environment no earlier cluster of the session set
     for name in ("MALLOC_TRIM_THRESHOLD_", *parallel._THREAD_VARIABLES):
         monkeypatch.delenv(name, raising=False)
+    before = _worker_environment()
     with parallel.runner(1, "local:2") as run:
         seen = list(run.client.run(_worker_environment).values())
+        during = _worker_environment()
+    # this process keeps its own: the nanny's thread limits would reach its numba (which refuses a
+    # changed NUMBA_NUM_THREADS once its threads run) and the next cluster
+    assert during == before and _worker_environment() == before
     assert len(seen) == 2
     for env in seen:
         assert env["MALLOC_TRIM_THRESHOLD_"] is None  # Dask's default (65536) costs system time
