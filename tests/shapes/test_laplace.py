@@ -105,3 +105,19 @@ def test_the_block_lanczos_gives_up_when_it_cannot_converge(monkeypatch):
     assert laplace._block_lanczos(factor.solve, mass, 30) is None
     fallback = laplace.laplace_basis(g, k=30, cache=False)  # ARPACK then
     np.testing.assert_allclose(fallback.evals, reference.evals, rtol=1e-7, atol=1e-9)
+
+
+def test_the_operators_are_built_once_per_geometry(monkeypatch):
+    import shapecond.shapes.laplace as laplace
+
+    built = []
+    real = laplace._build_operators
+    monkeypatch.setattr(laplace, "_build_operators", lambda g: built.append(g) or real(g))
+    g = sphere(subdivisions=2)
+    first = laplace.operators(g)
+    assert laplace.operators(g) is first and len(built) == 1
+    other = make_geometry(g.vertices * 2.0, g.faces)  # another geometry: its own operators
+    L, mass = laplace.operators(other)
+    assert len(built) == 2
+    np.testing.assert_allclose(L.toarray(), first[0].toarray(), atol=1e-12)  # scale-free
+    np.testing.assert_allclose(mass, first[1], atol=1e-15)

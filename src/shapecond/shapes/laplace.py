@@ -29,6 +29,7 @@ neighbours in the spectral embedding reaches the vertex-quantisation floor
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,8 @@ SHIFT = -1.0
 BLOCK = 8
 #: Convergence of a Ritz pair ``(θ, y)`` of the shift-inverted operator: ``‖Ty − θy‖ ≤ BLOCK_TOL θ``.
 BLOCK_TOL = 1e-4
+#: ``operators`` of the geometries alive in this process.
+_OPERATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,7 +87,17 @@ class LaplaceBasis:
 def operators(geometry: Geometry) -> tuple[sp.csc_matrix, np.ndarray]:
     """The stiffness ``L`` (cotangent weights, scale-free) and the lumped mass of the area-1 shape
     (module docstring): the operators the basis is computed from, and the landmarks' harmonic
-    coordinates (``matching.harmonic``) solved with."""
+    coordinates (``matching.harmonic``) solved with.
+
+    Built once per ``Geometry`` object while it lives (a geometry is never changed in place): a cold
+    match asks for them twice per shape, 0.65 s CPU each at 52,565 vertices.  Shared: read only."""
+    known = _OPERATORS.get(geometry)
+    if known is None:
+        known = _OPERATORS[geometry] = _build_operators(geometry)
+    return known
+
+
+def _build_operators(geometry: Geometry) -> tuple[sp.csc_matrix, np.ndarray]:
     import robust_laplacian
 
     V = np.asarray(geometry.vertices, dtype=np.float64)
