@@ -338,3 +338,25 @@ def test_the_deformation_level_is_zero_for_a_shape_against_itself_and_read_off_a
     assert level.epsilon == pytest.approx(level.epsilon_area * src.unit / src.diameter)   # in diameters
     r = sc.score("demo:animal", 40, epsilon=level.epsilon, cache=False)
     assert r.scale.epsilon == level.epsilon and "2 matched map(s) (faq)" in level.sentence()
+
+
+def test_the_error_bar_reads_the_target_with_the_solver_it_was_sampled_with(monkeypatch):
+    """One distance solver (heat-method factorisation) per shape in a match with its error bar, and
+    the same bar as with a solver of its own for the bar."""
+    import dataclasses
+    import shapecond.api.matching as api
+    import shapecond.matching.sampled as sampled
+
+    built = []
+    real = sampled.DistanceSolver
+    monkeypatch.setattr(sampled, "DistanceSolver", lambda g, b: built.append(g) or real(g, b))
+    src, tgt = "demo:animal:resolution=0.08", "demo:animal:delta=0.3,resolution=0.08"
+    shared = sc.match(src, tgt, [0, 100, 200], [0, 100, 200], n_points=40, cache=False)
+    assert len(built) == 2 and built[0] is not built[1]
+    pair = api._match_pair
+    monkeypatch.setattr(api, "_match_pair", lambda *a: dataclasses.replace(pair(*a), target_solver=None))
+    own = sc.match(src, tgt, [0, 100, 200], [0, 100, 200], n_points=40, cache=False)
+    assert len(built) == 5  # the bar's own solver of the target
+    timeless = [{k: v for k, v in r.summary["error_bar"].items() if k != "seconds"} for r in (shared, own)]
+    assert timeless[0] == timeless[1]
+    np.testing.assert_array_equal(shared.map, own.map)

@@ -165,7 +165,10 @@ def _bar_inputs(m, src, tgt, landmarks, opts):
     with."""
     source = m.source if m.source is not None else sample_surface(src, opts.n_points, opts.backend, opts.seed,
                                                                   landmarks, opts.cache)
-    return source, CachedSolver(tgt, opts.backend, m.target)
+    solver = m.target_solver if m.target_solver is not None else CachedSolver(tgt, opts.backend)
+    if m.target is not None:
+        solver.remember(m.target)
+    return source, solver
 
 
 def _error_bar(m, src, tgt, landmarks, opts):

@@ -128,6 +128,9 @@ class DenseMatch:
         target, and as source the samples its two starts were compared on (None with 3 landmarks),
         which the error bar reads the map's distortion on without sampling the source again.
     info : dict of diagnostics.
+    target_solver : the target's distance solver the target was sampled with (``match_shapes``), or
+        None: the error bar's rows of the target without a second factorisation (1.4 s CPU at 52k
+        vertices).
     """
 
     vertex_map: np.ndarray
@@ -135,6 +138,7 @@ class DenseMatch:
     source: SampledSurface | None
     target: SampledSurface | None
     info: dict = field(default_factory=dict)
+    target_solver: CachedSolver | None = None
 
 
 def sample_matcher_options(matcher: str, seed: int = 0) -> LH05Options | FAQOptions:
@@ -287,8 +291,9 @@ def match_shapes(source_geometry, target_geometry, landmarks_source, landmarks_t
     src = sample_surface(source_geometry, options.n_points, options.backend, options.seed, ls, options.cache)
     if options.samples == "same-ids":
         return _match_same_ids(src, target_geometry, ls, lt, options)
-    tgt = sample_surface(target_geometry, options.n_points, options.backend, options.seed, lt, options.cache)
-    return match_surfaces(src, tgt, ls, lt, options)
+    solver = CachedSolver(target_geometry, options.backend)
+    tgt = sample_surface(target_geometry, options.n_points, options.backend, options.seed, lt, options.cache, solver)
+    return replace(match_surfaces(src, tgt, ls, lt, options), target_solver=solver)
 
 
 def _match_same_ids(src: SampledSurface, target_geometry, ls, lt, options: MatchOptions) -> DenseMatch:
