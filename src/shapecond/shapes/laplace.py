@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.linalg import eig_banded
+from scipy.linalg import eig_banded, qr
 from scipy.sparse.linalg import LinearOperator, eigsh
 
 from .. import cache as disk
@@ -177,7 +177,7 @@ def _block_lanczos(solve, mass: np.ndarray, k: int) -> tuple[np.ndarray, np.ndar
     most = _columns(k) - b
     Q = np.empty((n, most + b), order="F")  # columns touched only as the space grows
     band = np.zeros((b + 1, most))  # the block tridiagonal projection Qᵀ T Q, lower band storage
-    Q[:, :b] = np.linalg.qr(np.random.default_rng(0).standard_normal((n, b)))[0]
+    Q[:, :b] = qr(np.random.default_rng(0).standard_normal((n, b)), mode="economic")[0]
     rows = np.arange(b)[None, :] + np.arange(b + 1)[:, None]  # band[d, i] = H[i + d, i] in a block column
     below, check = None, k + b
     for m in range(b, most + 1, b):
@@ -189,7 +189,7 @@ def _block_lanczos(solve, mass: np.ndarray, k: int) -> tuple[np.ndarray, np.ndar
         A = (A + A.T) / 2
         W -= block @ A
         W -= Q[:, :m] @ (Q[:, :m].T @ W)  # full reorthogonalisation: against round-off
-        Q[:, m:m + b], below = np.linalg.qr(W)
+        Q[:, m:m + b], below = qr(W, mode="economic", check_finite=False)  # numpy's: 7× the CPU
         if np.abs(np.diag(below)).min() < 1e-10:  # an invariant subspace (T's norm is 1 / (0 − σ) = 1)
             return None
         band[:, m - b:m] = np.vstack([A, below])[rows, np.arange(b)[None, :]]
