@@ -43,7 +43,7 @@ from ..errors import InputError
 from .geometry import Geometry
 
 DEFAULT_EIGENPAIRS = 150
-CACHE_VERSION = "laplace-3"  # 3: block Lanczos around σ = −1 (2: the shift-invert through a Cholesky factor)
+CACHE_VERSION = "laplace-4"  # 4: BLOCK_TOL 1e-3; 3: block Lanczos around σ = −1; 2: CHOLMOD shift-invert
 #: Shift of the shift-invert Lanczos iteration, below the zero eigenvalue of the area-1 operator and
 #: about a tenth of its first non-zero one (8π on a sphere); −1e-8 before, which made ``1/(λ − σ)`` span
 #: 10⁸ and the block recurrence's round-off (10⁻⁸ of the largest entry) an eigenvalue error of 2e-5.
@@ -52,7 +52,13 @@ SHIFT = -1.0
 #: 52,565 vertices (4.7 ms one at a time) and converged in the fewest columns of 8, 12 and 16.
 BLOCK = 8
 #: Convergence of a Ritz pair ``(θ, y)`` of the shift-inverted operator: ``‖Ty − θy‖ ≤ BLOCK_TOL θ``.
-BLOCK_TOL = 1e-4
+#: At 52,565 vertices (TOSCA david0, k = 150), against eigsh with tol 0: 1e-4 took 416 columns, the
+#: largest principal angle between the spans has sine 3.7e-6 and the eigenvalues agree to 3e-12; 1e-3
+#: took 376 (10 % less CPU), sine 8.1e-4, eigenvalues to 9.5e-8; 1e-2 took 336, sine 0.042 (not
+#: taken).  The maps with 1e-3 (FAQ, 6 landmarks, against main's eigsh bases): mean error over 8
+#: TOSCA_r test pairs +0.02 % (worst pair +0.30 %), over 4 SMAL_r pairs +0.00 %; TOSCA david0 →
+#: david1 at 52k vertices 4.932e-3 → 4.947e-3 sqrt(area) at 300 random vertices (+0.3 %).
+BLOCK_TOL = 1e-3
 #: ``operators`` of the geometries alive in this process.
 _OPERATORS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -147,8 +153,8 @@ def _eigenpairs(L: sp.csc_matrix, mass: np.ndarray, k: int) -> tuple[np.ndarray,
 
 def _columns(k: int) -> int:
     """The most columns the block Lanczos process keeps for ``k`` pairs, its last block included:
-    converged at 72, 128, 200–224 and 376–416 columns for k = 10, 30, 60 and 150 on blobs of 642 to
-    10,242 vertices and at 416 for k = 150 at 52,565 vertices (TOSCA david0)."""
+    converged (``BLOCK_TOL`` 1e-4) at 72, 128, 200–224 and 376–416 columns for k = 10, 30, 60 and
+    150 on blobs of 642 to 10,242 vertices and at 416 for k = 150 at 52,565 vertices (TOSCA david0)."""
     return -(-(3 * k + 13 * BLOCK) // BLOCK) * BLOCK
 
 
@@ -161,10 +167,11 @@ def _block_lanczos(solve, mass: np.ndarray, k: int) -> tuple[np.ndarray, np.ndar
     CPU, of which 1.8 s in the 378 solves and about 8 s in ARPACK's one-vector reorthogonalisation and
     Ritz vectors (level-2 BLAS over an n × 301 basis, bound by memory bandwidth).  Here the solves
     come in blocks of ``BLOCK`` (2.5× cheaper a column) and the reorthogonalisation is one full
-    classical Gram–Schmidt pass of matrix products after the three-term recurrence: 4.1 s CPU, 416
-    columns.  scipy's ``lobpcg`` with the factor as preconditioner stopped at its first iteration
-    (its Gram matrices lost definiteness).  Accuracy against eigsh (tol 0) there: the largest
-    principal angle between the 150-dimensional spans has sine 3.7e-6, eigenvalues agree to 3e-12.
+    classical Gram–Schmidt pass of matrix products after the three-term recurrence: 4.0–4.8 s CPU
+    against eigsh's 12.8–13.2 s in one run (load 4.7), 376 columns; accuracy: ``BLOCK_TOL``.  Tried:
+    eigsh's ``tol`` (1e-10, 1e-8, 1e-6: the same 378 solves and CPU, its single restart converges
+    every pair at once) and ``ncv`` (200: 9.2 s, 160: 19.6 s); scipy's ``lobpcg`` with the factor
+    as preconditioner stopped at its first iteration (its Gram matrices lost definiteness).
 
     Parameters
     ----------
