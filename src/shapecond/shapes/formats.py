@@ -186,7 +186,8 @@ def _plain_off(text: str, name: str):
     except InputError:
         return None
     b = np.frombuffer(text[head[start - 1][1]:].encode("utf-8"), dtype=np.uint8)
-    if nv == 0 or nf == 0 or b.size == 0 or b.max() >= 128 or np.any(np.append(b, 0)[np.flatnonzero(b == 13) + 1] != 10):
+    lone_return = np.any(np.append(b, 0)[np.flatnonzero(b == 13) + 1] != 10)  # splitlines breaks there
+    if nv == 0 or nf == 0 or b.size == 0 or b.max() >= 128 or lone_return:
         return None
     space = (b == 32) | (b == 9) | (b == 13) | (b == 10)
     firsts = np.flatnonzero(~space & np.append(True, space[:-1]))  # every token's first and last byte

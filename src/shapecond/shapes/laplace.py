@@ -169,8 +169,8 @@ def _block_lanczos(solve, mass: np.ndarray, k: int) -> tuple[np.ndarray, np.ndar
     come in blocks of ``BLOCK`` (2.5× cheaper a column) and the reorthogonalisation is one full
     classical Gram–Schmidt pass of matrix products after the three-term recurrence: 4.0–4.8 s CPU
     against eigsh's 12.8–13.2 s in one run (load 4.7), 376 columns; accuracy: ``BLOCK_TOL``.  Tried:
-    eigsh's ``tol`` (1e-10, 1e-8, 1e-6: the same 378 solves and CPU, its single restart converges
-    every pair at once) and ``ncv`` (200: 9.2 s, 160: 19.6 s); scipy's ``lobpcg`` with the factor
+    eigsh's ``tol`` (1e-10, 1e-8, 1e-6: the same 378 solves, 10.4–11.5 s) and ``ncv`` (200:
+    9.2 s, 351 solves; 160: 19.6 s; 400: 12.5 s); scipy's ``lobpcg`` with the factor
     as preconditioner stopped at its first iteration (its Gram matrices lost definiteness).
 
     Parameters
