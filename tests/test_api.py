@@ -1,5 +1,6 @@
 """``import shapecond as sc``: one API for every input form, JSON-ready results, the README example."""
 
+import functools
 import json
 import re
 import subprocess
@@ -335,3 +336,32 @@ def test_the_deformation_level_is_zero_for_a_shape_against_itself_and_read_off_a
     assert level.epsilon == pytest.approx(level.epsilon_area * src.unit / src.diameter)   # in diameters
     r = sc.score("demo:animal", 40, epsilon=level.epsilon, cache=False)
     assert r.scale.epsilon == level.epsilon and "2 matched map(s) (faq)" in level.sentence()
+
+
+def test_the_error_bar_reads_the_target_with_the_solver_it_was_sampled_with(monkeypatch):
+    """One distance solver (heat-method factorisation) per shape in a match with its error bar, and
+    the same bar as with a solver of its own for the bar."""
+    from shapecond.matching.problem import MatchProblem
+
+    import shapecond.matching.sampled as sampled
+
+    built = []
+    real = sampled.DistanceSolver
+    monkeypatch.setattr(sampled, "DistanceSolver", lambda g, b: built.append(g) or real(g, b))
+    src, tgt = "demo:animal:resolution=0.08", "demo:animal:delta=0.3,resolution=0.08"
+    shared = sc.match(src, tgt, [0, 100, 200], [0, 100, 200], n_points=40, cache=False)
+    assert len(built) == 2 and built[0] is not built[1]
+    assert shared.problem._sampling_solver is None  # not kept once the bar has read with it
+    sampled_map = MatchProblem.sample_map.func
+
+    def forgetting(self):  # the sampling solver dropped before the bar: the bar makes its own
+        out = sampled_map(self)
+        self._sampling_solver = None
+        return out
+    monkeypatch.setattr(MatchProblem, "sample_map", functools.cached_property(forgetting))
+    MatchProblem.sample_map.__set_name__(MatchProblem, "sample_map")
+    own = sc.match(src, tgt, [0, 100, 200], [0, 100, 200], n_points=40, cache=False)
+    assert len(built) == 5  # the bar's own solver of the target
+    timeless = [{k: v for k, v in r.summary["error_bar"].items() if k != "seconds"} for r in (shared, own)]
+    assert timeless[0] == timeless[1]
+    np.testing.assert_array_equal(shared.map, own.map)

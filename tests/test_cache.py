@@ -219,3 +219,24 @@ def test_clear_keeps_a_file_at_the_secrets_name_that_is_not_a_secret(folder, cap
     (folder / ".secret").write_text("my password list\n")
     code, out, err = run_cli(capsys, "cache", "clear")
     assert code == 0 and (folder / ".secret").read_text() == "my password list\n" and "kept 1 files" in err
+
+
+def test_keys_and_checksums_hash_the_arrays_bytes_as_before():
+    """Arrays are hashed through their buffers, not copies: the same digests as of ``tobytes()``, so
+    the entries of earlier versions keep their keys and checksums."""
+    arrays = {"rows": np.arange(12, dtype=np.float32).reshape(3, 4), "unit": np.array(1.5),
+              "flags": np.array([True, False]), "name": np.array("abc"), "F": np.asfortranarray(np.eye(3))}
+    h = hashlib.sha256(cache.FORMAT.encode())
+    for a in arrays.values():
+        a = np.ascontiguousarray(a)
+        h.update(f"array{a.dtype.str}{a.shape}".encode())
+        h.update(a.tobytes())
+    assert cache.key_of(*arrays.values()) == h.hexdigest()[:32]
+    import hmac
+    secret = b"s" * 32
+    t = hmac.new(secret, f"{cache.FORMAT}:key".encode(), hashlib.sha256)
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        t.update(f"{name}{a.dtype.str}{a.shape}".encode())
+        t.update(a.tobytes())
+    assert cache._tag("key", arrays, secret) == t.hexdigest()

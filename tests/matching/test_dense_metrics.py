@@ -104,6 +104,29 @@ def test_distance_extension_in_small_cost_blocks_is_the_same_map(pair, monkeypat
     assert np.array_equal(maps[1], maps[1 << 40]) and np.array_equal(maps[1000], maps[1 << 40])
 
 
+def test_the_distance_extension_is_the_cost_formula_argmin(pair):
+    """Each source vertex goes to the target vertex of its cell's candidates with the least
+    ``(|a|² + |b|²) − 2 a·b`` over the anchors' distances, computed in that order, first on ties."""
+    from shapecond.matching import dense
+    from shapecond.matching.seeded import FAQOptions, faq_match
+
+    src, _, tgt, _, ls, lt = pair
+    s, ils = insert_landmarks(sample_surface(src, 60, cache=False), ls)
+    t, ilt = insert_landmarks(sample_surface(tgt, 60, cache=False), lt)
+    sm = faq_match(s.D, t.D, ils, ilt, FAQOptions())
+    near_s, near_t = np.argmin(s.rows, axis=0), np.argmin(t.rows, axis=0)
+    assert np.array_equal(s.nearest, near_s) and np.array_equal(t.nearest, near_t)
+    anchors = np.argsort(s.D, axis=1, kind="stable")[:, :8]
+    expected = np.empty(src.n_vertices, dtype=np.int64)
+    for v in range(src.n_vertices):
+        A = anchors[near_s[v]]
+        W = np.concatenate([np.flatnonzero(near_t == j) for j in sm.t[A]])
+        a = s.rows[A, v].astype(np.float64)[:, None] / s.unit
+        b = t.rows[np.ix_(sm.t[A], W)].astype(np.float64) / t.unit
+        expected[v] = W[np.argmin((a * a).sum(0)[:, None] + (b * b).sum(0)[None, :] - 2.0 * (a.T @ b), axis=1)[0]]
+    assert np.array_equal(dense.dense_map(s, t, sm.t), expected)
+
+
 def test_bad_pairs_are_input_errors(pair):
     src, _, tgt, _, ls, lt = pair
     with pytest.raises(InputError, match="counts differ"):

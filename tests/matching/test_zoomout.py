@@ -38,7 +38,7 @@ def test_nearest_rows_in_small_score_blocks_is_the_same_map(monkeypatch):
     whole, in_regions = nearest_rows(X, Y), Z._nearest_in_regions(X, Y, cell, regions)
     assert list(whole[:3]) == [2, 2, 2] and in_regions[0] == 2
     assert all(in_regions[i] in regions[c] for i, c in enumerate(cell))
-    for budget in (1, 4 * 900 * 7):  # blocks of 1 and of 7 rows
+    for budget in (1, 4 * 900 * 7, 4 * 900 * 9):  # blocks of 1, of 7 rows, of 9 (a shorter last one)
         monkeypatch.setattr(Z, "SCORE_BYTES", budget)
         assert np.array_equal(nearest_rows(X, Y), whole)
         assert np.array_equal(Z._nearest_in_regions(X, Y, cell, regions), in_regions)

@@ -1,6 +1,7 @@
 """The Laplace–Beltrami basis against the sphere's closed-form spectrum, and its invariances."""
 
 import numpy as np
+import scipy.sparse as sp
 import pytest
 
 from shapecond.errors import InputError
@@ -72,3 +73,51 @@ def test_the_cholesky_route_and_the_lu_fallback_give_one_basis(monkeypatch):
     np.testing.assert_allclose(chol.evals, lu.evals, rtol=1e-7, atol=1e-9)
     overlap = np.abs(np.einsum("ij,ij->j", chol.evecs * chol.mass[:, None], lu.evecs))
     assert overlap[:20].min() > 1 - 1e-6  # (the last pairs may sit in a cluster the two orders split)
+
+
+def test_the_block_lanczos_route_gives_arpacks_basis(monkeypatch):
+    """The block Lanczos process (taken on a shape of 642 vertices for 30 pairs) against ARPACK's
+    eigsh through the same factor: the same eigenvalues and the same span, pair by pair."""
+    import shapecond.shapes.laplace as laplace
+
+    g = bumpy_blob(subdivisions=3)
+    calls = []
+    real = laplace._block_lanczos
+    monkeypatch.setattr(laplace, "_block_lanczos", lambda *a: calls.append(real(*a)) or calls[-1])
+    block = laplace.laplace_basis(g, k=30, cache=False)
+    assert len(calls) == 1 and calls[0] is not None  # the block route was taken and converged
+    monkeypatch.setattr(laplace, "_block_lanczos", lambda *a: None)
+    arpack = laplace.laplace_basis(g, k=30, cache=False)
+    np.testing.assert_allclose(block.evals, arpack.evals, rtol=1e-7, atol=1e-9)
+    cross = block.evecs.T @ (block.mass[:, None] * arpack.evecs)
+    assert np.linalg.svd(cross, compute_uv=False).min() > 1 - 1e-7  # one 30-dimensional span
+    assert np.abs(np.diag(cross))[:20].min() > 1 - 1e-6  # the same vectors, signs fixed the same way
+
+
+def test_the_block_lanczos_gives_up_when_it_cannot_converge(monkeypatch):
+    import shapecond.shapes.laplace as laplace
+
+    g = bumpy_blob(subdivisions=3)
+    reference = laplace.laplace_basis(g, k=30, cache=False)
+    monkeypatch.setattr(laplace, "BLOCK_TOL", 0.0)  # no Ritz pair meets a zero tolerance in 4k columns
+    L, mass = laplace.operators(g)
+    factor = laplace.SparseCholesky((L - laplace.SHIFT * sp.diags(mass)).tocsc())
+    assert laplace._block_lanczos(factor.solve, mass, 30) is None
+    fallback = laplace.laplace_basis(g, k=30, cache=False)  # ARPACK then
+    np.testing.assert_allclose(fallback.evals, reference.evals, rtol=1e-7, atol=1e-9)
+
+
+def test_the_operators_are_built_once_per_geometry(monkeypatch):
+    import shapecond.shapes.laplace as laplace
+
+    built = []
+    real = laplace._build_operators
+    monkeypatch.setattr(laplace, "_build_operators", lambda g: built.append(g) or real(g))
+    g = sphere(subdivisions=2)
+    first = laplace.operators(g)
+    assert laplace.operators(g) is first and len(built) == 1
+    other = make_geometry(g.vertices * 2.0, g.faces)  # another geometry: its own operators
+    L, mass = laplace.operators(other)
+    assert len(built) == 2
+    np.testing.assert_allclose(L.toarray(), first[0].toarray(), atol=1e-12)  # scale-free
+    np.testing.assert_allclose(mass, first[1], atol=1e-15)

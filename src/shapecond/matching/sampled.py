@@ -70,8 +70,16 @@ class SampledSurface:
 
     @property
     def nearest(self) -> np.ndarray:
-        """(n,) index of every vertex's nearest sample."""
-        return np.argmin(self.rows, axis=0)
+        """(n,) index of every vertex's nearest sample (the first one on a tie).  Row by row, the
+        result of ``np.argmin(rows, axis=0)`` on finite rows without its transposed copy of them,
+        whose fresh pages cost 0.35 s CPU at 400 × 52,565 (0.05 s here)."""
+        best = self.rows[0].copy()
+        out = np.zeros(best.size, dtype=np.int64)
+        for i in range(1, self.rows.shape[0]):
+            closer = self.rows[i] < best
+            best[closer] = self.rows[i][closer]
+            out[closer] = i
+        return out
 
 
 def surface_unit(geometry: Geometry, raw_diameter: float) -> float:
@@ -96,22 +104,31 @@ class CachedSolver:
     def __init__(self, geometry: Geometry, backend: str = "heat", known: "SampledSurface | None" = None):
         self.geometry, self.backend, self.n = geometry, backend, geometry.n_vertices
         self._solver, self._rows = None, {}
-        if known is not None:  # rows already computed (a sampled surface of the same geometry)
-            self._rows.update({int(s): r for s, r in zip(known.samples, known.rows)})
+        if known is not None:
+            self.remember(known)
+
+    def remember(self, known: "SampledSurface") -> None:
+        """Keep the rows of ``known`` (a sampled surface of the same geometry), already computed."""
+        self._rows.update({int(s): r for s, r in zip(known.samples, known.rows)})
+
+    @property
+    def solver(self) -> DistanceSolver:
+        """The distance solver, built on first use (``sample_surface`` samples with it)."""
+        if self._solver is None:
+            self._solver = DistanceSolver(self.geometry, self.backend)
+        return self._solver
 
     def distances(self, sources):
         sources = [int(s) for s in np.atleast_1d(sources)]
         todo = [s for s in dict.fromkeys(sources) if s not in self._rows]
         if todo:
-            if self._solver is None:
-                self._solver = DistanceSolver(self.geometry, self.backend)
-            for s, row in zip(todo, self._solver.distances(todo)):
+            for s, row in zip(todo, self.solver.distances(todo)):
                 self._rows[s] = row
         return np.stack([self._rows[s] for s in sources]) if sources else np.empty((0, self.n))
 
 
 def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat", seed: int = 0,
-                   landmarks=(), cache: bool = True, solver: DistanceSolver | None = None
+                   landmarks=(), cache: bool = True, solver: DistanceSolver | CachedSolver | None = None
                    ) -> SampledSurface:
     """FPS-sample ``geometry`` (landmarks first) and keep the distance rows.
 
@@ -128,6 +145,8 @@ def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat
         Internal vertex indices placed first.
     cache : bool
         Read/write ``<cache_dir>/matching-<key>.npz``.
+    solver : the geometry's distance solver (a ``CachedSolver``'s is built only if sampling needs it,
+        and kept for later rows of that geometry), or None for a new one.
     """
     if n_points > geometry.n_vertices:
         raise InputError(f"{geometry.name} has {geometry.n_vertices} vertices, fewer than the "
@@ -140,7 +159,7 @@ def sample_surface(geometry: Geometry, n_points: int = 400, backend: str = "heat
                          lambda a: _check_entry(a, n, landmarks)) if cache else None
     if z is not None:
         return SampledSurface(geometry, z["samples"].astype(np.int64), z["rows"], float(z["unit"]), backend)
-    solver = solver if solver is not None else DistanceSolver(geometry, backend)
+    solver = solver.solver if isinstance(solver, CachedSolver) else solver or DistanceSolver(geometry, backend)
     fps = farthest_point_sampling(solver, n_points, landmarks=landmarks, seed=seed, keep_rows=True)
     surf = SampledSurface(geometry, fps.samples, fps.rows, surface_unit(geometry, float(fps.rows.max())),
                           backend)

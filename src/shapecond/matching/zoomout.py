@@ -214,8 +214,10 @@ def _nearest_blocked(X: np.ndarray, Y: np.ndarray, half_norms: np.ndarray, max_r
     the scores computed for at most ``max_rows`` rows of ``X`` and ``SCORE_BYTES`` at a time."""
     out = np.empty(X.shape[0], dtype=np.int64)
     step = int(np.clip(SCORE_BYTES // (4 * max(Y.shape[0], 1)), 1, max(max_rows, 1)))
-    for s in range(0, X.shape[0], step):
-        score = X[s:s + step] @ Y.T
+    scores = np.empty(min(step, X.shape[0]) * Y.shape[0], dtype=np.float32)  # one block's, reused:
+    for s in range(0, X.shape[0], step):  # a fresh 64 MB block is mapped anew, its page faults cost
+        rows = X[s:s + step]  # as much as the product (0.38 against 0.17 s at 1,500 × 52,565 × 40)
+        score = np.matmul(rows, Y.T, out=scores[:rows.shape[0] * Y.shape[0]].reshape(rows.shape[0], -1))
         score -= half_norms  # argmax of x·y − |y|²/2 is the argmin of |x − y|²
         out[s:s + step] = np.argmax(score, axis=1)
     return out
