@@ -121,3 +121,19 @@ def test_the_operators_are_built_once_per_geometry(monkeypatch):
     assert len(built) == 2
     np.testing.assert_allclose(L.toarray(), first[0].toarray(), atol=1e-12)  # scale-free
     np.testing.assert_allclose(mass, first[1], atol=1e-15)
+
+
+def test_the_block_lanczos_finds_eigenspaces_wider_than_its_block(monkeypatch):
+    """On an icosphere the eigenspaces of the sphere's degree l have up to 2l + 1 dimensions (23 by
+    the 150th pair), wider than the 8 columns of a block: none of ARPACK's eigenvalues is missed."""
+    import shapecond.shapes.laplace as laplace
+
+    g = sphere(subdivisions=4)
+    calls = []
+    real = laplace._block_lanczos
+    monkeypatch.setattr(laplace, "_block_lanczos", lambda *a: calls.append(real(*a)) or calls[-1])
+    block = laplace.laplace_basis(g, k=150, cache=False)
+    assert len(calls) == 1 and calls[0] is not None
+    monkeypatch.setattr(laplace, "_block_lanczos", lambda *a: None)
+    arpack = laplace.laplace_basis(g, k=150, cache=False)
+    np.testing.assert_allclose(block.evals, arpack.evals, rtol=1e-6, atol=1e-9)
