@@ -20,10 +20,12 @@ the bar will read: ``BAR_SAMPLES`` of them when it compares its two starts on
 them (more than 3 landmarks, ``pipeline``'s docstring), else N.
 
 Solvers.  Given ``solvers`` (the evaluation shares one per shape between all the
-matchings of a target), every stage uses them.  Without, each stage solves as
-``match_shapes`` always did (the matchers their own, the bar one that knows the
-target's sample rows): one shared solver would solve other blocks of sources,
-and the heat method's rows differ with the block in the last bits.
+matchings of a target), every stage uses them.  Without, each stage solves with
+its own, except that the bar reads the target with the factorisation the target
+was sampled with (``solvers``: the same factor, the same rows, one heat-method
+factorisation less); rows are not shared between stages otherwise, since one
+shared solver would solve other blocks of sources, and the heat method's rows
+differ with the block in the last bits.
 """
 
 from __future__ import annotations
