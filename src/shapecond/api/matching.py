@@ -13,7 +13,6 @@ from ..matching.pipeline import MATCHERS, MatchOptions, match_samples
 from ..matching.problem import MatchProblem
 from ..matching.seeded import FAQOptions
 from ..matching.spectral import LH05Options
-from ..matching.suggest import suggest_landmarks
 from .guards import guard_match
 from .inputs import DEFAULT_POINTS, load
 from .options import BACKENDS
