@@ -3,6 +3,7 @@ and the true map as a dense start."""
 
 from __future__ import annotations
 
+import argparse
 import json
 from pathlib import Path
 
@@ -28,3 +29,20 @@ def truth_start(null, ref_s, ref_t):
 
     _, nearest = cKDTree(null.vertices[ref_s]).query(null.vertices)
     return ref_t[nearest]
+
+
+def run_or_report(doc: str, run, report, run_arguments) -> None:
+    """The command line of a release benchmark with a ``run`` step (``DATASET``, ``--out`` and the
+    arguments ``run_arguments(parser)`` adds) and a ``report`` step (``--run LABEL=FILE`` repeated,
+    ``--note``), dispatched to ``run(args)`` or ``report(args)``."""
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("dataset", type=Path)
+    run_arguments(r)
+    r.add_argument("--out", required=True)
+    q = sub.add_parser("report")
+    q.add_argument("--run", action="append", required=True, help="LABEL=FILE of a run")
+    q.add_argument("--note", default="")
+    a = p.parse_args()
+    run(a) if a.cmd == "run" else report(a)

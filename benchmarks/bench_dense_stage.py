@@ -23,7 +23,6 @@ one JSON per code version (run it from two checkouts: ``PYTHONPATH=OTHER/src``).
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -32,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
-from _releases import truth_start  # noqa: E402
+from _releases import run_or_report, truth_start  # noqa: E402
 
 
 def _pair(cls, null, src, ref_s, target_path, a) -> dict:
@@ -111,20 +110,12 @@ def report(a) -> None:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("dataset", type=Path)
-    r.add_argument("--out", required=True)
-    r.add_argument("--class", dest="cls")
-    r.add_argument("--max-targets", type=int, default=8)
-    r.add_argument("--landmarks", type=int, default=6)
-    r.add_argument("--matchers", default="faq,lh05,zoomout")
-    q = sub.add_parser("report")
-    q.add_argument("--run", action="append", required=True, help="LABEL=JSON of a run")
-    q.add_argument("--note")
-    a = p.parse_args()
-    run(a) if a.cmd == "run" else report(a)
+    def arguments(r):
+        r.add_argument("--class", dest="cls")
+        r.add_argument("--max-targets", type=int, default=8)
+        r.add_argument("--landmarks", type=int, default=6)
+        r.add_argument("--matchers", default="faq,lh05,zoomout")
+    run_or_report(__doc__, run, report, arguments)
 
 
 if __name__ == "__main__":

@@ -23,7 +23,6 @@ never costs accuracy"), where the variant is 5 % worse or better than what ships
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from dataclasses import replace
@@ -33,7 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
-from _releases import groups, landmark_sets  # noqa: E402
+from _releases import groups, landmark_sets, run_or_report  # noqa: E402
 
 VARIANTS = ("distances", "harmonic")
 
@@ -115,20 +114,12 @@ def report(a) -> None:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("dataset", type=Path)
-    r.add_argument("landmarks", type=Path)
-    r.add_argument("--out", required=True)
-    r.add_argument("--pairs")
-    r.add_argument("--methods", default="fps,pls,hks,cnbs,cnbs-scale")
-    r.add_argument("--max-targets", type=int, default=8)
-    q = sub.add_parser("report")
-    q.add_argument("--run", action="append", required=True, help="LABEL=JSONL of a run")
-    q.add_argument("--note")
-    a = p.parse_args()
-    run(a) if a.cmd == "run" else report(a)
+    def arguments(r):
+        r.add_argument("landmarks", type=Path)
+        r.add_argument("--pairs")
+        r.add_argument("--methods", default="fps,pls,hks,cnbs,cnbs-scale")
+        r.add_argument("--max-targets", type=int, default=8)
+    run_or_report(__doc__, run, report, arguments)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,6 @@ shipped one, in ``benchmarks/RESULTS.md`` section ``zoomout-schedule``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
@@ -30,7 +29,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 from _results import command_line, machine, write_section  # noqa: E402
-from _releases import groups, landmark_sets, truth_start  # noqa: E402
+from _releases import groups, landmark_sets, run_or_report, truth_start  # noqa: E402
 
 #: name -> the k_start of each dense stage run in turn.
 SCHEDULES = {"shipped": [20], "from 60": [60], "whole basis once": [None], "whole basis 3x": [None] * 3}
@@ -108,20 +107,12 @@ def report(a) -> None:
 
 
 def main() -> None:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="cmd", required=True)
-    r = sub.add_parser("run")
-    r.add_argument("dataset", type=Path)
-    r.add_argument("landmarks", type=Path)
-    r.add_argument("--out", required=True)
-    r.add_argument("--methods", default="pls,fps")
-    r.add_argument("--pairs", default=None)
-    r.add_argument("--max-targets", type=int, default=4)
-    q = sub.add_parser("report")
-    q.add_argument("--run", action="append", required=True, help="LABEL=JSONL of a run")
-    q.add_argument("--note", default="")
-    a = p.parse_args()
-    run(a) if a.cmd == "run" else report(a)
+    def arguments(r):
+        r.add_argument("landmarks", type=Path)
+        r.add_argument("--methods", default="pls,fps")
+        r.add_argument("--pairs", default=None)
+        r.add_argument("--max-targets", type=int, default=4)
+    run_or_report(__doc__, run, report, arguments)
 
 
 if __name__ == "__main__":
