@@ -77,7 +77,11 @@ every level searching only near the current map (the final pass's regions): from
 hubness-corrected neighbours (CSLS, 10 nearest) at the subsample levels: 3 % lower on 12 rows
 (TOSCA_r 0.0154 → 0.0150), one row 5 % higher, not validated further; the spectral block compared
 by direction only (rows scaled to one norm, which removes a local change of area between the
-shapes): from FAQ 3 rows better, 5 worse (SMAL_r, 8 rows).  **Why no optimiser of this stage
+shapes): from FAQ 3 rows better, 5 worse (SMAL_r, 8 rows); a rectangular functional map at the
+coarse levels (the ``k`` target functions represented in 1.25–2× as many source functions, since a
+band-limited function pulled back through a stretching map is not band-limited at the same ``k``):
+SMAL_r 8 rows −2 % from FAQ (1.5×), but TOSCA_r 16 rows (one pair per class, FPS and PLS
+landmarks) worse on 12, +17 % on the FPS rows (victoria12 → victoria23: 24.1 → 31.9 ×10⁻³).  **Why no optimiser of this stage
 can reach the truth between species: its objective prefers the wrong map.**  On the same 8 SMAL_r
 rows (the cow to 4 animals, FPS and PLS landmarks) the spectral residual
 ``min_C Σ_x m_x ‖Φ_s[x] C − Φ_t[T x]‖² / k`` at the whole basis is 0.14–0.24 at the shipped output
