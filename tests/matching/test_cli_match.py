@@ -109,6 +109,12 @@ def test_same_ids_samples_report_the_sample_error(files, capsys, matcher):
                        "--landmarks-target", ls, "--samples", "same-ids", "--points", 60, "-o", d / "x.txt")
     assert code == 2 and "do not share their vertex order" in err and err.count("\n") == 1
     assert not (d / "x.txt").exists()
+    # nor is the identity their ground truth for the page's error field, refused before matching
+    code, _, err = run(capsys, "match", d / "src.off", d / "tgt.off", "--landmarks-source", ls,
+                       "--landmarks-target", ls, "--points", 60, "-o", d / "x.txt", "--html", d / "x.html",
+                       "--truth", "same-ids")
+    assert code == 2 and "--truth same-ids" in err and "vertex order" in err and err.count("\n") == 1
+    assert not (d / "x.txt").exists() and not (d / "x.html").exists()
 
 
 def test_the_error_bar_is_in_the_summary_and_its_doubt_field_in_a_ply(files, capsys):

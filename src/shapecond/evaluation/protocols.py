@@ -121,9 +121,10 @@ def _shared_order(cls, target_path, landmark_sets, setup, protocol, load) -> lis
     s = setup.shape
     source = sample_surface(load(cls.null), s.n_points, s.backend, s.seed, cache=s.cache)
     g = load(target_path)
-    if g.n_vertices != source.geometry.n_vertices or not np.array_equal(g.ids, source.geometry.ids):
-        raise InputError(f"{g.name} and {source.geometry.name} do not share their vertex ids: shapes of a class "
-                         "need the same vertex count and order (or a corres/ folder of .vts files)")
+    if not source.geometry.shares_vertex_order(g):  # the truth is the identity: one mesh deformed, not one count
+        raise InputError(f"{g.name} and {source.geometry.name} do not share their vertex order (vertex ids and "
+                         "triangles): shapes without .vts files need one mesh deformed (or a corres/ folder of "
+                         ".vts files)")
     if protocol == "corresponding":
         tgt = surface_at(g, source.samples, s.backend, s.cache)
         solvers = (CachedSolver(source.geometry, s.backend, source), CachedSolver(g, s.backend, tgt))

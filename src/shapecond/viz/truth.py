@@ -98,7 +98,10 @@ def truth_map(truth, src, tgt) -> np.ndarray:
         vertices, first = np.unique(s_int, return_index=True)  # the first reference point of a vertex wins
         t[vertices] = t_int[first]
         return t
-    if isinstance(truth, str):  # "same-ids"
+    if isinstance(truth, str):  # "same-ids": the identity, a truth only for one mesh deformed
+        if not src.shares_vertex_order(tgt):
+            raise InputError(f"--truth same-ids: {src.name} and {tgt.name} do not share their vertex order "
+                             "(vertex ids and triangles), so the identity is not their ground truth")
         truth = np.arange(n_ids)
     truth = np.asarray(truth)
     if truth.ndim != 1 or truth.size < n_ids or not np.issubdtype(truth.dtype, np.integer):
