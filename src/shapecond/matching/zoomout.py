@@ -81,7 +81,10 @@ shapes): from FAQ 3 rows better, 5 worse (SMAL_r, 8 rows); a rectangular functio
 coarse levels (the ``k`` target functions represented in 1.25–2× as many source functions, since a
 band-limited function pulled back through a stretching map is not band-limited at the same ``k``):
 SMAL_r 8 rows −2 % from FAQ (1.5×), but TOSCA_r 16 rows (one pair per class, FPS and PLS
-landmarks) worse on 12, +17 % on the FPS rows (victoria12 → victoria23: 24.1 → 31.9 ×10⁻³).  **Why no optimiser of this stage
+landmarks) worse on 12, +17 % on the FPS rows (victoria12 → victoria23: 24.1 → 31.9 ×10⁻³); a
+further whitened block of each point's distances to the landmarks divided by their mean (scale-free,
+long-range, where the anchors and the harmonic coordinates are flat): every SMAL_r row within
+±3 ×10⁻³ (muybridge_097_01, PLS: 106.0 → 103.5, from the truth 54.7 → 54.8).  **Why no optimiser of this stage
 can reach the truth between species: its objective prefers the wrong map.**  On the same 8 SMAL_r
 rows (the cow to 4 animals, FPS and PLS landmarks) the spectral residual
 ``min_C Σ_x m_x ‖Φ_s[x] C − Φ_t[T x]‖² / k`` at the whole basis is 0.14–0.24 at the shipped output
