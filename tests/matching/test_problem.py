@@ -90,16 +90,37 @@ def test_results_are_computed_once_and_kept(pair, monkeypatch):
     monkeypatch.setattr(P, "match_samples", counting("match", P.match_samples))
     monkeypatch.setattr(P, "bar_and_samples", counting("bar", P.bar_and_samples))
     monkeypatch.setattr(P, "suggest_landmarks", counting("suggest", P.suggest_landmarks))
-    monkeypatch.setattr(P, "truth_errors", counting("truth", P.truth_errors))
+    monkeypatch.setattr(P, "_truth_raw", counting("truth", P._truth_raw))
     truth = np.arange(pair[0].n_vertices)
     for _ in range(2):
         assert p.dense_match is p.dense_match and p.sample_map is p.dense_match.sample_map
         assert p.error_bar is p.error_bar and p.doubt is p.doubt
         assert p.suggest(2) is p.suggest(2)
-        assert p.truth_errors(truth) is p.truth_errors(truth.copy())
+        assert np.array_equal(p.truth_errors(truth)[0], p.truth_errors(truth.copy())[0])
+        assert p.truth_summary(truth) == p.truth_summary(truth)
     assert calls == {"match": 1, "bar": 1, "suggest": 1, "truth": 1}
     err, samples = p.truth_errors(truth)
     assert samples.size == P.TRUTH_SAMPLES and np.all(err >= 0) and err.max() > 0
+
+
+def test_the_truth_summary_is_the_geodesic_error_in_both_units(pair):
+    """Against the geodesic distance from each sample's image to its true image, computed here."""
+    from shapecond.matching.sampled import surface_unit
+    from shapecond.shapes.geodesics import DistanceSolver
+
+    p = MatchProblem(*pair, LM, LM, MatchOptions(matcher="faq", n_points=40, dense="nearest", cache=False))
+    truth = np.roll(np.arange(pair[0].n_vertices), 7)  # a wrong "truth": large, known errors
+    s = p.truth_summary(truth)
+    _, samples = p.truth_errors(truth)
+    rows = DistanceSolver(pair[1], "heat").distances(truth[samples])
+    raw = rows[np.arange(samples.size), p.vertex_map[samples]]
+    unit = surface_unit(pair[1], float(rows.max()))
+    assert s["n_points"] == samples.size and s["unit"] == "sqrt(area)"
+    assert np.isclose(s["mean"], raw.mean() / unit) and np.isclose(s["worst"], raw.max() / unit)
+    assert np.isclose(s["mean_percent_half_diameter"], 100 * raw.mean() / (0.5 * rows.max()))
+    assert s["within_0.05"] == np.mean(raw / unit <= 0.05) < 1
+    exact = p.truth_summary(p.vertex_map)  # the map itself as the truth: no error
+    assert exact["mean"] == exact["worst"] == 0.0 and exact["within_0.05"] == 1.0
 
 
 def test_the_match_page_draws_the_errors_its_problem_computed(pair, tmp_path, monkeypatch):
@@ -112,6 +133,10 @@ def test_the_match_page_draws_the_errors_its_problem_computed(pair, tmp_path, mo
     r.to_html(tmp_path / "a.html", truth="same-ids")
     r.to_html(tmp_path / "b.html", truth="same-ids")
     assert len(r.problem._truth_errors) == 1  # one truth, its errors computed once
+    errors = r.truth_errors("same-ids")  # the same errors, in the summary
+    assert r.summary["truth"] is errors and len(r.problem._truth_errors) == 1 and errors["mean"] >= 0
+    with pytest.raises(InputError, match="one target vertex id per source vertex id"):
+        r.truth_errors(np.zeros(3, dtype=np.int64))  # not one id per source id
     assert (tmp_path / "a.html").read_bytes() == (tmp_path / "b.html").read_bytes()
 
 

@@ -286,6 +286,22 @@ class MatchResult(Pictures):
                                        "sqrt(area)")
         return out
 
+    def truth_errors(self, truth) -> dict:
+        """The map's errors against a ground truth (``matching.problem.MatchProblem.truth_summary``): mean,
+        median and worst geodesic error in sqrt(area) of the target and the mean in % of half its
+        diameter, at up to 200 farthest-point samples of the source vertices whose true image is known.
+        Recorded in ``summary["truth"]``.
+
+        ``truth``: as ``to_html``'s (one target id per source id, -1: none; "same-ids" for one mesh
+        deformed; a map file; ``"SOURCE.vts,TARGET.vts"``)."""
+        if self.problem is None or self.drawing is None:
+            raise InputError("errors against a ground truth need two surfaces, not distance matrices")
+        from ..viz.truth import truth_map
+
+        src, tgt = self.drawing[:2]
+        self.summary["truth"] = self.problem.truth_summary(truth_map(truth, src, tgt))
+        return self.summary["truth"]
+
     def to_dict(self) -> dict:
         """The summary of ``shapecond match --json`` plus the map itself."""
         return jsonable({**self.summary, "map": self.map})

@@ -42,7 +42,8 @@ from shapecond.matching.metrics import errors_from_rows, normalise
 from shapecond.matching.pipeline import (MIN_ZOOMOUT_LANDMARKS, DenseMatch, MatchOptions, anchors_of,
                                          comparison_samples, dense_stage, match_landmarks_only, match_samples,
                                          sample_sides)
-from shapecond.matching.sampled import CachedSolver, SampledSurface, carry_samples, insert_landmarks, sample_surface
+from shapecond.matching.sampled import (CachedSolver, SampledSurface, carry_samples, insert_landmarks, sample_surface,
+                                        surface_unit)
 from shapecond.matching.spectral import SampleMatch
 from shapecond.matching.suggest import Suggestion, suggest_landmarks
 from shapecond.shapes.geodesics import DistanceSolver
@@ -297,11 +298,26 @@ class MatchProblem:
 
     def truth_errors(self, truth, n_points: int = TRUTH_SAMPLES) -> tuple[np.ndarray, np.ndarray]:
         """The map's errors against a ground truth (``truth_errors``, module function), kept per truth."""
+        raw, samples, diameter = self._truth(truth, n_points)
+        return normalise(raw, diameter), samples
+
+    def truth_summary(self, truth, n_points: int = TRUTH_SAMPLES) -> dict:
+        """The map's errors against a ground truth in the field's two units (``truth_errors``): mean,
+        median and worst in sqrt(area) of the target and in % of half its diameter, the share of the
+        measured points within 0.05 sqrt(area), and the number of points measured."""
+        raw, samples, diameter = self._truth(truth, n_points)
+        area = normalise(raw, diameter, surface_unit(self.target_geometry, diameter) ** 2, "sqrt_area")
+        half = normalise(raw, diameter)
+        return {"mean": float(area.mean()), "median": float(np.median(area)), "worst": float(area.max()),
+                "within_0.05": float(np.mean(area <= 0.05)), "unit": "sqrt(area)",
+                "mean_percent_half_diameter": float(half.mean()), "n_points": int(samples.size)}
+
+    def _truth(self, truth, n_points):
         truth = np.asarray(truth, dtype=np.int64)
         key = (truth.tobytes(), int(n_points))
         if key not in self._truth_errors:
-            self._truth_errors[key] = truth_errors(self.source_geometry, self.target_geometry, self.vertex_map,
-                                                   truth, n_points)
+            self._truth_errors[key] = _truth_raw(self.source_geometry, self.target_geometry, self.vertex_map,
+                                                 truth, n_points)
         return self._truth_errors[key]
 
 
@@ -324,6 +340,13 @@ def truth_errors(source_geometry, target_geometry, vertex_map, truth, n_points: 
     -------
     (errors at the samples, their source internal vertices)
     """
+    raw, samples, diameter = _truth_raw(source_geometry, target_geometry, vertex_map, truth, n_points, backend)
+    return normalise(raw, diameter), samples
+
+
+def _truth_raw(source_geometry, target_geometry, vertex_map, truth, n_points, backend="heat"):
+    """(raw geodesic errors, their source samples, the target's diameter as the rows read it) of
+    ``truth_errors``."""
     known = np.flatnonzero((vertex_map >= 0) & (truth >= 0))
     if not known.size:
         raise InputError("no source vertex has both a match and a ground-truth image")
@@ -334,8 +357,7 @@ def truth_errors(source_geometry, target_geometry, vertex_map, truth, n_points: 
     picked = np.asarray(farthest_point_sampling(solver, k, seed=0).samples, np.int64) if k >= 3 else np.arange(k)
     samples = known[picked] if known.size < source_geometry.n_vertices else picked
     rows = DistanceSolver(target_geometry, backend).distances(truth[samples])
-    raw = errors_from_rows(rows, vertex_map[samples])
-    return normalise(raw, float(rows.max()) or 1.0), samples
+    return errors_from_rows(rows, vertex_map[samples]), samples, float(rows.max()) or 1.0
 
 
 class _Among:
