@@ -101,6 +101,15 @@ def test_decimation_keeps_ids_and_says_so():
     assert data["n"] == small.n_vertices and any("decimated" in n for n in data["notes"])
 
 
+@pytest.mark.parametrize("h", [1e-9, 0.01, 0.3])  # 1e-9: too many cells for one int64 key, the row keys
+def test_grid_cells_are_numbered_as_the_rows_of_their_coordinates(h):
+    V = generate("sphere", {"subdivisions": 3}).vertices
+    keys = np.floor((V - V.min(axis=0)) / h).astype(np.int64)
+    _, first, label = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    got = H._clusters(V, h)
+    assert np.array_equal(got[0], first) and np.array_equal(got[1], label.ravel())
+
+
 @pytest.mark.slow
 def test_a_50k_vertex_page_is_a_few_mb():
     g = generate("sphere", {"subdivisions": 7})  # 163,842 vertices: decimated to 50k at most

@@ -28,7 +28,7 @@ from pathlib import Path
 
 #: The report's file name, beside the table.
 REPORT_NAME = "report.html"
-#: The most bytes of view data a report embeds (about 40 kB a map: some 700 maps).
+#: The most bytes of view data a report embeds (about 48 kB a map: some 600 maps).
 MAX_VIEW_BYTES = 30_000_000
 
 _STYLE = ("body{font-family:sans-serif;margin:2em;max-width:70em}table{border-collapse:collapse}"

@@ -72,7 +72,12 @@ def _hex(rgb) -> str:
 
 def _clusters(V: np.ndarray, h: float):
     keys = np.floor((V - V.min(axis=0)) / h).astype(np.int64)
-    _, first, label = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    size = keys.max(axis=0) + 1
+    if np.prod(size.astype(float)) < 2.0 ** 62:  # one int64 per cell, in the order of the rows (ten times faster)
+        keys = (keys[:, 0] * size[1] + keys[:, 1]) * size[2] + keys[:, 2]
+        _, first, label = np.unique(keys, return_index=True, return_inverse=True)
+    else:
+        _, first, label = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     return first, label.ravel()
 
 

@@ -17,8 +17,8 @@ computed as the match page computes them (``pages``):
 
 The payload is JSON (``payload_json``): positions quantised to uint16 on the
 bounding box, faces as uint16 indices (uint32 above 65,535 vertices), colours
-as uint8 RGB, each array in base64: about 40 kB for ``VIEW_VERTICES`` vertices
-(a point cloud, drawn as points, about 17 kB).  The batch writes it beside the
+as uint8 RGB, each array in base64: about 48 kB for ``VIEW_VERTICES`` vertices
+(a point cloud, drawn as points, about 24 kB).  The batch writes it beside the
 map (``views/NAME.json``, atomically) with the key of the row it belongs to;
 ``views_html`` and ``view_cell`` put views in a page, drawn by the viewer
 script's ``MapViews`` (one WebGL renderer for all of them, each view copied to
