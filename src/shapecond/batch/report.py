@@ -103,7 +103,8 @@ def _views_note(kept: dict, left_out: int) -> str:
         return ""
     from ..viz.mapview import VIEW_VERTICES
 
-    out = ("<p>Each view shows the map's target (the shape the template is mapped onto), decimated to at most "
+    out = ("<p>Each view shows the map's target (the shape its source is mapped onto: from a template, the "
+           "shape of the row), decimated to at most "
            f"{VIEW_VERTICES:,} vertices; drag it to turn it, double-click to turn it back. <b>transfer</b>: every "
            "vertex takes the colour of the source vertex mapped nearest to it, the source coloured by position: "
            "smooth where the map is right, a seam or a patch where it flips or collapses. <b>doubt</b>: the error "
