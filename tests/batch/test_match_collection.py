@@ -1,11 +1,13 @@
 """A collection matched to a template: landmark files, batch rows and maps, resume, report, the API."""
 
 import json
+import re
 
 import numpy as np
 import pytest
 import shapecond as sc
 from shapecond.batch import run_batch
+from shapecond.batch.matches import read_view
 from shapecond.batch.run import BatchRun
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
@@ -115,10 +117,15 @@ def test_batch_matches_a_collection_and_resumes(collection, tmp_path):
     assert not (tmp_path / "maps" / "bare.txt").exists()
     report = (tmp_path / "report.html").read_text()
     assert "data:image/png;base64," in report and "Annotate more" in report and "bare" in report
-    stamp = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "maps").iterdir()}
+    # each map's view beside it (of the shape, its target), in the report once
+    assert sorted(p.name for p in (tmp_path / "views").iterdir()) == ["s1.json", "s2.json"]
+    assert [read_view(rows[f"{k}.off"])["vertices"] for k in ("s1", "s2")] == [n["s1"], n["s2"]]
+    assert len(re.findall(r'class="sc-mapdata" data-view="\d+"', report)) == 2
+    stamp = {p.name: p.stat().st_mtime_ns for d in ("maps", "views") for p in (tmp_path / d).iterdir()}
     again = run_batch(shapes, out, OPTIONS, what=[f"match:{root / 'template.off'}"], how=BatchRun(resume=True))
     assert (again.scored, again.resumed) == (0, 4)
-    assert {p.name: p.stat().st_mtime_ns for p in (tmp_path / "maps").iterdir()} == stamp
+    assert {p.name: p.stat().st_mtime_ns for d in ("maps", "views") for p in (tmp_path / d).iterdir()} == stamp
+    assert len(re.findall(r'class="sc-mapdata" data-view="\d+"', (tmp_path / "report.html").read_text())) == 2
     assert len(out.read_text().splitlines()) == 4  # no row twice
 
 

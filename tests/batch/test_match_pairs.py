@@ -8,6 +8,7 @@ import pytest
 import shapecond as sc
 from shapecond.api.collection import cycle_error
 from shapecond.batch import run_batch
+from shapecond.batch.matches import read_view
 from shapecond.batch.run import BatchRun
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
@@ -87,6 +88,8 @@ def test_a_template_matched_both_ways_keeps_the_one_way_names(strips, both_ways)
     assert np.loadtxt(back["map_file"]).shape == (n["s1"],) and np.loadtxt(there["map_file"]).shape == (n["template"],)
     assert there["cycle_error"] >= 0 and back["cycle_error"] >= 0
     assert [json.loads(r["params"])["direction"] for r in (there, back)] == ["template to shape", "shape to template"]
+    # each map its own view, of its own target
+    assert [read_view(r)["vertices"] for r in (there, back)] == [n["s1"], n["template"]]
 
 
 def test_one_way_has_no_cycle_error_and_keeps_its_key(strips, tmp_path):

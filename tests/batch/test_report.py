@@ -23,3 +23,45 @@ def test_the_annotate_more_list_puts_the_largest_bar_first_and_every_map_is_list
     order = [every.index(f"t → {n}<") for n in ("fine", "bad", "mid", "worst")]
     assert order == sorted(order)
     assert "3 of them say <b>annotate more</b>, 1 failed" in page and "no landmarks for this shape" in every
+
+
+def _fake_view(size: int) -> dict:
+    """A stand-in view payload of about ``size`` bytes (the report reads only its size)."""
+    return {"format": 1, "n": 1, "pad": "x" * size}
+
+
+def test_views_beyond_the_budget_keep_the_annotate_more_list_then_the_largest_bars(monkeypatch):
+    from shapecond.batch import report
+
+    bars = [0.01, 0.02, 0.03, 0.04, 0.06, 0.07, 0.5]
+    rows = [_row(f"s{k}", b) for k, b in enumerate(bars)]
+    views = {r["map_file"]: _fake_view(1000) for r in rows}
+    views[rows[1]["map_file"]] = None  # a map without its view (a batch from before views)
+    page = report_html(rows, views)
+    assert page.count("<div class=\"sc-mapview\"") == 6 + 3 and "views left out" not in page
+    monkeypatch.setattr(report, "MAX_VIEW_BYTES", 4500)  # four views fit
+    page = report_html(rows, views)
+    every = page.split("<h2>Every map, by its bar</h2>")[1]
+    shown = [n for n in range(7) if f't → s{n}</td><td><div class="sc-mapview"' in every]
+    assert shown == [3, 4, 5, 6]  # the three that say annotate more, then the largest other bar
+    assert "<b>2 views left out</b>" in page
+
+
+def test_a_view_is_read_only_for_the_row_it_was_written_for(tmp_path):
+    import os
+
+    from shapecond.batch.matches import read_view, view_path, write_view
+
+    row = _row("cat", 0.02, content_hash="abc", params='{"pairs":[]}')
+    row["map_file"] = str(tmp_path / "maps" / "cat.txt")
+    assert view_path(row["map_file"]) == tmp_path / "views" / "cat.json"
+    assert read_view(row) is None  # none written
+    write_view(view_path(row["map_file"]), _fake_view(10), row)
+    assert read_view(row)["pad"] == "x" * 10
+    assert read_view({**row, "params": '{"pairs":[["a","a"]]}'}) is None  # other landmarks since
+    assert read_view({**row, "content_hash": "abd"}) is None              # another shape
+    view_path(row["map_file"]).write_text("{not json")
+    assert read_view(row) is None
+    view_path(row["map_file"]).unlink()
+    os.mkfifo(view_path(row["map_file"]))  # refused without blocking
+    assert read_view(row) is None

@@ -6,8 +6,6 @@ import hashlib
 import io
 import json
 import re
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -103,6 +101,15 @@ def test_decimation_keeps_ids_and_says_so():
     assert data["n"] == small.n_vertices and any("decimated" in n for n in data["notes"])
 
 
+@pytest.mark.parametrize("h", [1e-9, 0.01, 0.3])  # 1e-9: too many cells for one int64 key, the row keys
+def test_grid_cells_are_numbered_as_the_rows_of_their_coordinates(h):
+    V = generate("sphere", {"subdivisions": 3}).vertices
+    keys = np.floor((V - V.min(axis=0)) / h).astype(np.int64)
+    _, first, label = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    got = H._clusters(V, h)
+    assert np.array_equal(got[0], first) and np.array_equal(got[1], label.ravel())
+
+
 @pytest.mark.slow
 def test_a_50k_vertex_page_is_a_few_mb():
     g = generate("sphere", {"subdivisions": 7})  # 163,842 vertices: decimated to 50k at most
@@ -138,32 +145,6 @@ def test_cli_html_options(tmp_path, capsys):
 
 
 # --- in a real browser ----------------------------------------------------------------------------
-
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--proxy-server=127.0.0.1:9", "--proxy-bypass-list=<-loopback>"]
-
-
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        if shutil.which(name):
-            return shutil.which(name)
-    return None
-
-
-@pytest.fixture(scope="module")
-def browser():
-    sync = pytest.importorskip("playwright.sync_api", reason="playwright is not installed (the 'test' extra)")
-    exe = _chromium()
-    if exe is None:
-        pytest.skip("no Chromium on this machine (apt-get install chromium)")
-    with sync.sync_playwright() as p:
-        with tempfile.TemporaryDirectory() as profile:
-            ctx = p.chromium.launch_persistent_context(profile, executable_path=exe, args=CHROMIUM_ARGS,
-                                                       headless=True, viewport={"width": 1100, "height": 800})
-            yield ctx
-            ctx.close()
-
 
 def _open(ctx, path: Path):
     """Open a page offline; return (page, console errors, network requests)."""

@@ -160,8 +160,10 @@ def label_pairs(reference_lm: dict, shape_lm: tuple | None, reference: str = "th
     return labels, ids_r, ids_s
 
 
-def _match_fields(template, shape, template_lm: dict, shape_lm: tuple | None, reverse: bool, match_options):
-    """(the row's match fields, the ``MatchResult``) of one direction (``match_to_template``)."""
+def _match_fields(template, shape, template_lm: dict, shape_lm: tuple | None, reverse: bool, match_options,
+                  view: bool = False):
+    """(the row's match fields, the ``MatchResult``) of one direction (``match_to_template``); with ``view``,
+    the fields hold the map's compact view under ``"_view"``."""
     labels, ids_t, ids_s = label_pairs(template_lm, shape_lm, match_options.pop("reference", "the template"))
     flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
     loaded = load(shape, **flags)
@@ -175,11 +177,15 @@ def _match_fields(template, shape, template_lm: dict, shape_lm: tuple | None, re
               "bar_epsilon": bar.get("epsilon"), "bar_epsilon_hat": bar.get("epsilon_hat"),
               "suggest_source_id": first.get("source_id"), "suggest_image_id": first.get("image_id"),
               "suggest_bar_after": first.get("bar_after")}
+    if view:
+        from ..viz.mapview import map_view
+
+        fields["_view"] = map_view(result)
     return fields, result
 
 
 def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None, *, reverse: bool = False,
-                      **match_options):
+                      view: bool = False, **match_options):
     """(the row's match fields, the map) of ``shape`` matched from ``template`` (module docstring).
 
     Parameters
@@ -190,6 +196,8 @@ def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None
     shape_lm : the shape's (``{label: vertex id}``, where they were read), as ``landmarks_of`` gives them;
         None when it has none.
     reverse : match the shape to the template instead (``REVERSE``; the suggestion is then a shape vertex).
+    view : also compute the map's compact view (``viz.mapview.map_view``: its target drawn coarsely with the
+        transfer colours and the error bar's doubt), returned in the fields under ``"_view"`` (not a column).
     **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``seed``...); ``suggest`` defaults to 1;
         ``reference`` names the template in messages (default "the template").
 
@@ -200,7 +208,7 @@ def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None
     or shape id -> template id with ``reverse``).  ``InputError`` for a shape without landmarks, with fewer
     than ``MIN_PAIRS`` shared labels, or with an id out of range.
     """
-    fields, result = _match_fields(template, shape, template_lm, shape_lm, reverse, dict(match_options))
+    fields, result = _match_fields(template, shape, template_lm, shape_lm, reverse, dict(match_options), view)
     return fields, result.map
 
 
@@ -245,15 +253,17 @@ def _cycle(result, back, match_options) -> float | None:
     return cycle_error(source, result.map, back, landmarks, **{k: match_options.get(k, v) for k, v in keys.items()})
 
 
-def match_both_ways(template, shape, template_lm: dict, shape_lm: tuple | None, **match_options):
+def match_both_ways(template, shape, template_lm: dict, shape_lm: tuple | None, *, view: bool = False,
+                    **match_options):
     """[(fields, map) template -> shape, (fields, map | None) shape -> template], each with ``cycle_error``.
 
-    ``match_to_template`` in both directions; ``InputError`` as it when the first direction fails.  When
-    only the second fails, its fields are ``{"error": the one-line message}`` and both cycle errors None.
+    ``match_to_template`` in both directions (``view`` as there, for each map); ``InputError`` as it when the
+    first direction fails.  When only the second fails, its fields are ``{"error": the one-line message}``
+    and both cycle errors None.
     """
-    fields, result = _match_fields(template, shape, template_lm, shape_lm, False, dict(match_options))
+    fields, result = _match_fields(template, shape, template_lm, shape_lm, False, dict(match_options), view)
     try:
-        back_fields, back = _match_fields(template, shape, template_lm, shape_lm, True, dict(match_options))
+        back_fields, back = _match_fields(template, shape, template_lm, shape_lm, True, dict(match_options), view)
     except ShapecondError as exc:
         return [({**fields, "cycle_error": None}, result.map), ({"error": _one_line(exc)}, None)]
     options = {k: v for k, v in match_options.items() if k != "reference"}

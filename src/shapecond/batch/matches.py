@@ -27,6 +27,13 @@ its row, so that a row in the table always has its whole map on disk, and a
 batch killed at any moment leaves no torn map.  A task's rows that are
 already in the table (a kill between the two rows of a shape) are not
 appended again.
+
+Each map also gets its compact view (``viz.mapview.map_view``: the map's
+target drawn coarsely with the transfer colours and the error bar's doubt),
+computed by the worker beside the map and written before it, atomically, to
+``views/NAME.json`` with the key of its row (content hash and parameters), so
+that ``--resume`` keeps it and ``report.html`` shows a view only with the row
+it was computed for (``read_view``).
 """
 
 from __future__ import annotations
@@ -43,6 +50,8 @@ from .rows import parse_what
 
 #: The folder of the maps, beside the table.
 MAPS_FOLDER = "maps"
+#: The folder of the maps' compact views (``viz.mapview``), beside the table.
+VIEWS_FOLDER = "views"
 
 
 #: The columns that belong to one map (``api.collection.match_to_template``'s fields and the cycle error).
@@ -162,20 +171,60 @@ class MatchPlan:
             back = row.pop("_reverse", None)
             if back is None:  # the task failed before its second map: the same error
                 back = {"match_direction": self.directions[1], "match_source": unit[0], "match_target": unit[1]}
-            rows.append({**row, **dict.fromkeys(MAP_FIELDS), "_map": None, **back, "params": params[1]})
+            rows.append({**row, **dict.fromkeys(MAP_FIELDS), "_map": None, "_view": None, **back,
+                         "params": params[1]})
         for k, r in enumerate(rows):
             self._write_map(r, self.map_name(unit, k))
         return rows
 
     def _write_map(self, row: dict, name: str) -> None:
-        """Write a row's map (``"_map"``, removed from the row) and name its file in the row."""
-        vertex_map = row.pop("_map", None)
+        """Write a row's view (``"_view"``) and map (``"_map"``), both removed from the row, and name the map's
+        file in the row."""
+        vertex_map, view = row.pop("_map", None), row.pop("_view", None)
         if vertex_map is None:
             row["map_file"] = None
             return
         path = self.maps_dir / f"{name}.txt"
+        if view is not None:
+            write_view(view_path(path), view, row)
         write_map(path, vertex_map)
         row["map_file"] = str(path)
+
+
+def view_path(map_file) -> Path:
+    """Where the compact view of the map ``map_file`` (``maps/NAME.txt``) lies: ``views/NAME.json``."""
+    map_file = Path(map_file)
+    return map_file.parent.parent / VIEWS_FOLDER / f"{map_file.stem}.json"
+
+
+def _view_key(row: dict) -> list:
+    """What a view belongs to: its row's content hash and parameters (the map is a function of them)."""
+    return [row.get("content_hash"), row.get("params")]
+
+
+def write_view(path, view: dict, row: dict) -> None:
+    """Write the view payload ``view`` of ``row``'s map to ``path`` (atomically), with the row's key."""
+    from ..output import write_text
+    from ..viz.mapview import payload_json
+
+    write_text(path, payload_json({**view, "key": _view_key(row)}))
+
+
+def read_view(row: dict) -> dict | None:
+    """The view of ``row``'s map, or None: no map, no view file (a batch from before views), an unreadable
+    one, or one written for another row (other landmarks, shape or options since)."""
+    from ..shapes.formats import read_text
+
+    if not row.get("map_file"):
+        return None
+    try:
+        view = json.loads(read_text(view_path(row["map_file"])))
+    except (InputError, ValueError):
+        return None
+    from ..viz.mapview import VIEW_FORMAT
+
+    ok = isinstance(view, dict) and view.get("format") == VIEW_FORMAT and view.get("key") == _view_key(row)
+    return view if ok else None
 
 
 def _shape_landmarks(specs, table) -> tuple[dict, dict]:

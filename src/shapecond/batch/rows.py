@@ -237,7 +237,7 @@ def _match_columns(row: dict, job, shape, kw: dict) -> None:
                match_target=row["file"])
     options = dict(matcher=kw["matcher"] or "lh05", n_points=kw["points"] or DEFAULT_POINTS, seed=kw["seed"],
                    backend=kw["backend"], cache=kw["cache"], force=kw["force"],
-                   largest_component=kw["largest_component"], reference=job.reference_words)
+                   largest_component=kw["largest_component"], reference=job.reference_words, view=True)
     if len(job.directions) == 1:
         fields, vertex_map = match_to_template(job.reference, shape, job.reference_lm, job.shape_lm, **options)
         row.update(fields, _map=vertex_map)

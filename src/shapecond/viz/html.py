@@ -72,7 +72,12 @@ def _hex(rgb) -> str:
 
 def _clusters(V: np.ndarray, h: float):
     keys = np.floor((V - V.min(axis=0)) / h).astype(np.int64)
-    _, first, label = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    size = keys.max(axis=0) + 1
+    if np.prod(size.astype(float)) < 2.0 ** 62:  # one int64 per cell, in the order of the rows (ten times faster)
+        keys = (keys[:, 0] * size[1] + keys[:, 1]) * size[2] + keys[:, 2]
+        _, first, label = np.unique(keys, return_index=True, return_inverse=True)
+    else:
+        _, first, label = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     return first, label.ravel()
 
 
@@ -210,20 +215,25 @@ def summary(lines) -> str:
     return f'<div class="sc-summary">{html.escape(chr(10).join(lines))}</div>'
 
 
-def page(title: str, body) -> str:
-    """A complete self-contained HTML document: ``title`` and the HTML fragments ``body``."""
+def viewer_scripts() -> list[str]:
+    """The ``<script>`` elements a page with viewers ends with: three.js (as text, ``three_source``) and the
+    viewer script, which draws every ``div.sc-viewer`` and ``div.sc-mapview`` of the page."""
     three = three_source()
     for bad in ("</script", "<!--", "<script"):
         if bad in three.lower():
             raise RuntimeError("the vendored three.js cannot be inlined in a <script> element")
+    return [f'<script type="text/plain" id="sc-three">{three}</script>', f"<script>{asset('viewer.js')}</script>"]
+
+
+def page(title: str, body) -> str:
+    """A complete self-contained HTML document: ``title`` and the HTML fragments ``body``."""
+    scripts = viewer_scripts()
     return "\n".join([
         "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
         '<meta name="viewport" content="width=device-width, initial-scale=1">',
         f'<meta name="generator" content="shapecond; three.js {THREE_VERSION} (MIT licence)">',
         f"<title>{html.escape(title)}</title>", f"<style>{asset('viewer.css')}</style></head><body>",
-        f"<h1>{html.escape(title)}</h1>", *body,
-        f'<script type="text/plain" id="sc-three">{three}</script>',
-        f"<script>{asset('viewer.js')}</script>", "</body></html>", ""])
+        f"<h1>{html.escape(title)}</h1>", *body, *scripts, "</body></html>", ""])
 
 
 def inline(document: str, height: int = 640) -> str:

@@ -160,14 +160,42 @@ class MatchFields:
     up: str | None = None
 
 
-def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
+def transfer_sources(tgt, vmap, at=None) -> np.ndarray:
+    """The colour transfer's carry: for each target vertex of ``at`` (internal indices; None: every one),
+    the source vertex (internal index) whose image under ``vmap`` lies nearest to it (Euclidean).
+
+    A target vertex is drawn with the colour (and the doubt) of that source vertex: where the map is
+    right the source's position colours carry over smoothly.
+    """
     from scipy.spatial import cKDTree
 
+    T = np.asarray(tgt.vertices, float)
+    ok = np.flatnonzero(vmap >= 0)
+    _, near = cKDTree(T[vmap[ok]]).query(T if at is None else T[np.asarray(at, dtype=np.int64)])
+    return ok[near]
+
+
+def doubt_colouring(doubt) -> Colouring:
+    """The colours of the error bar's doubt field ``doubt`` (per source vertex, sqrt(area); NaN: none):
+    turbo from 0 to its largest finite value."""
+    finite = np.asarray(doubt, float)[np.isfinite(doubt)]
+    top = float(finite.max()) if finite.size else 0.0
+    return Colouring("turbo", 0.0, top or 1.0, "error bar's doubt, sqrt(area)")
+
+
+def internal_map(result) -> np.ndarray:
+    """A ``MatchResult``'s map as internal indices of its drawing's shapes (-1: a dropped vertex)."""
+    src, tgt = result.drawing[:2]
+    vmap = np.full(src.n_vertices, -1, dtype=np.int64)
+    ok = result.map[src.ids] >= 0
+    vmap[ok] = tgt.to_internal(result.map[src.ids][ok])
+    return vmap
+
+
+def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
     n_s = src.n_vertices
     ref = position_colours(np.asarray(src.vertices, float))
-    ok = np.flatnonzero(vmap >= 0)
-    _, near = cKDTree(np.asarray(tgt.vertices, float)[vmap[ok]]).query(np.asarray(tgt.vertices, float))
-    colours = np.vstack([ref, ref[ok[near]]])  # each target vertex: colour of the source vertex mapped nearest
+    colours = np.vstack([ref, ref[transfer_sources(tgt, vmap)]])
     marks = [int(v) for v in lms] + [n_s + int(v) for v in lmt]
     ranks = tuple(range(len(lms))) * 2
     seg = np.stack([a[list(lms)], b[list(lmt)]], axis=1) if len(lms) else None
@@ -191,9 +219,8 @@ def _match_layers(src, tgt, vmap, a, b, lms, lmt, fields: MatchFields):
                      f"{np.median(err):.3g} %) and interpolated between them")
     if fields.doubt is not None:
         full = np.concatenate([np.asarray(fields.doubt, float), np.full(tgt.n_vertices, np.nan)])
-        top = float(np.nanmax(full)) if np.any(np.isfinite(full)) else 0.0
-        lay = replace(colour_layer(np.where(np.isfinite(full), full, 0.0), len(full),
-                                   Colouring("turbo", 0.0, top or 1.0, "error bar's doubt, sqrt(area)"), hover=full),
+        lay = replace(colour_layer(np.where(np.isfinite(full), full, 0.0), len(full), doubt_colouring(full),
+                                   hover=full),
                       value_name="doubt, sqrt(area)", landmarks=marks, ranks=ranks, segments=seg,
                       label="error bar's doubt (on the source)")
         lay.rgba[n_s:] = (0.75, 0.75, 0.75, 1.0)
@@ -447,9 +474,7 @@ def _match_result_page(result, o: PageOptions) -> str:
     if drawing is None:
         raise InputError("a map between distance matrices has no surface to draw")
     src, tgt, ls, lt = drawing
-    vmap = np.full(src.n_vertices, -1, dtype=np.int64)
-    ok = result.map[src.ids] >= 0
-    vmap[ok] = tgt.to_internal(result.map[src.ids][ok])
+    vmap = internal_map(result)
     t = None if o.truth is None else truth_map(o.truth, src, tgt)
     problem = getattr(result, "problem", None)  # the match's own: the errors computed once, by it
     errors = None if t is None or problem is None else problem.truth_errors(t)

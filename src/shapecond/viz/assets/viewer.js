@@ -44,6 +44,43 @@ void main() { vColour = rgb; gl_PointSize = size; gl_Position = projectionMatrix
   const POINT_FS = `precision highp float; in vec3 vColour; out vec4 outColour;
 void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(vColour, 1.0); }`;
 
+  // the material of a mesh (faces) or point cloud coloured by its "rgb" attribute
+  function material(T, faces, shading, pointSize) {
+    return new T.RawShaderMaterial({
+      glslVersion: T.GLSL3, side: T.DoubleSide,
+      uniforms: { ambient: { value: shading[0] }, diffuse: { value: shading[1] }, size: { value: pointSize } },
+      vertexShader: faces ? MESH_VS : POINT_VS, fragmentShader: faces ? MESH_FS : POINT_FS,
+    });
+  }
+
+  // the camera of shapecond.viz.render.view_rotation: rows right, up, toward the viewer
+  function viewFrame(T, elev, azim) {
+    const e = elev * PI / 180, a = azim * PI / 180;
+    const toward = new T.Vector3(Math.cos(e) * Math.cos(a), Math.cos(e) * Math.sin(a), Math.sin(e));
+    const right = new T.Vector3(-Math.sin(a), Math.cos(a), 0);
+    return { toward, right, up: new T.Vector3().crossVectors(toward, right) };
+  }
+
+  // half-extents of a bounding box seen from the view f (the PNGs' panels are fitted alike)
+  function fitBox(b, c, f) {
+    let w = 1e-9, h = 1e-9;
+    for (const x of [b.min.x, b.max.x]) for (const y of [b.min.y, b.max.y]) for (const z of [b.min.z, b.max.z]) {
+      const dx = x - c.x, dy = y - c.y, dz = z - c.z;
+      w = Math.max(w, Math.abs(dx * f.right.x + dy * f.right.y + dz * f.right.z));
+      h = Math.max(h, Math.abs(dx * f.up.x + dy * f.up.y + dz * f.up.z));
+    }
+    return [w, h];
+  }
+
+  // an orthographic camera looking at centre from f.toward, showing the half-extents fitted (zoomed)
+  function aim(c, centre, radius, f, fitted, asp, zoom) {
+    const half = 1.08 * Math.max(fitted[1], fitted[0] / asp) / zoom;
+    c.left = -half * asp; c.right = half * asp; c.top = half; c.bottom = -half;
+    c.near = radius * 0.01; c.far = radius * 10;
+    c.position.copy(centre).addScaledVector(f.toward, 3 * radius);
+    c.up.copy(f.up); c.lookAt(centre); c.updateProjectionMatrix(); c.updateMatrixWorld();
+  }
+
   class Viewer {
     constructor(T, root, data) {
       this.T = T; this.root = root; this.d = data;
@@ -100,12 +137,7 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
       g.computeBoundingSphere();
       this.centre = g.boundingSphere.center.clone(); this.radius = g.boundingSphere.radius || 1;
       g.computeBoundingBox(); this.box = g.boundingBox;
-      const [ambient, diffuse] = this.d.shading;
-      const mat = new T.RawShaderMaterial({
-        glslVersion: T.GLSL3, side: T.DoubleSide,
-        uniforms: { ambient: { value: ambient }, diffuse: { value: diffuse }, size: { value: this.d.point_size } },
-        vertexShader: this.faces ? MESH_VS : POINT_VS, fragmentShader: this.faces ? MESH_FS : POINT_FS,
-      });
+      const mat = material(T, this.faces, this.d.shading, this.d.point_size);
       this.object = this.faces ? new T.Mesh(g, mat) : new T.Points(g, mat);
       this.scene.add(this.object);
       this.camera = new T.OrthographicCamera(-1, 1, 1, -1, this.radius * 0.01, this.radius * 10);
@@ -178,35 +210,14 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
 
     setView(k) { [this.elev, this.azim] = this.d.views[k]; this.zoom = 1; this.fitted = null; this.draw(); }
 
-    // half-extents of the bounding box seen from the current view (the PNGs' panels are fitted alike)
-    fit(f) {
-      const b = this.box, c = this.centre;
-      let w = 1e-9, h = 1e-9;
-      for (const x of [b.min.x, b.max.x]) for (const y of [b.min.y, b.max.y]) for (const z of [b.min.z, b.max.z]) {
-        const dx = x - c.x, dy = y - c.y, dz = z - c.z;
-        w = Math.max(w, Math.abs(dx * f.right.x + dy * f.right.y + dz * f.right.z));
-        h = Math.max(h, Math.abs(dx * f.up.x + dy * f.up.y + dz * f.up.z));
-      }
-      return [w, h];
-    }
-
-    // the camera of shapecond.viz.render.view_rotation: rows right, up, toward the viewer
-    frame() {
-      const e = this.elev * PI / 180, a = this.azim * PI / 180, T = this.T;
-      const toward = new T.Vector3(Math.cos(e) * Math.cos(a), Math.cos(e) * Math.sin(a), Math.sin(e));
-      const right = new T.Vector3(-Math.sin(a), Math.cos(a), 0);
-      return { toward, right, up: new T.Vector3().crossVectors(toward, right) };
-    }
+    frame() { return viewFrame(this.T, this.elev, this.azim); }
 
     place() {
       const w = this.stage.clientWidth || 600, h = this.stage.clientHeight || 400;
       if (this.size !== `${w}x${h}`) { this.renderer.setSize(w, h, false); this.size = `${w}x${h}`; }
-      const f = this.frame(), c = this.camera, asp = w / h;
-      if (!this.fitted) this.fitted = this.fit(f);  // kept while the shape is turned, so it does not jump
-      const half = 1.08 * Math.max(this.fitted[1], this.fitted[0] / asp) / this.zoom;
-      c.left = -half * asp; c.right = half * asp; c.top = half; c.bottom = -half;
-      c.position.copy(this.centre).addScaledVector(f.toward, 3 * this.radius);
-      c.up.copy(f.up); c.lookAt(this.centre); c.updateProjectionMatrix(); c.updateMatrixWorld();
+      const f = this.frame();
+      if (!this.fitted) this.fitted = fitBox(this.box, this.centre, f);  // kept while turning: no jumps
+      aim(this.camera, this.centre, this.radius, f, this.fitted, w / h, this.zoom);
       return f;
     }
 
@@ -452,6 +463,134 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
     }
   }
 
+  // Small turnable views of many maps (shapecond.viz.mapview: report.html of a matched batch).  A browser
+  // keeps only about 16 live WebGL contexts, so ONE renderer draws every view and each is copied to its
+  // own 2-D canvas: when it scrolls into sight, and while it is turned (drag; double-click: back to the
+  // first view).  Each div.sc-mapview shows the payload of the script.sc-mapdata of the same data-view,
+  // with its colourings transfer and doubt.
+  const MAPVIEW_LAYERS = [["transfer", "transfer"], ["doubt", "doubt"]];
+
+  class MapViews {
+    constructor(T) {
+      this.T = T; this.views = []; this.shapes = new Map(); this.materials = new Map(); this.frames = 0;
+      this.renderer = new T.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+      this.renderer.outputColorSpace = T.LinearSRGBColorSpace;
+      this.renderer.setClearColor(0xffffff, 1);
+      this.scene = new T.Scene();
+      this.camera = new T.OrthographicCamera(-1, 1, 1, -1, 0.01, 10);
+      this.mark = new T.Mesh(new T.OctahedronGeometry(1), new T.MeshBasicMaterial({ color: SUGGEST_COLOUR }));
+      this.scene.add(this.mark);
+      const data = new Map();
+      document.querySelectorAll("script.sc-mapdata").forEach((s) => data.set(s.dataset.view, s));
+      this.seen = window.IntersectionObserver ? new IntersectionObserver((entries) => entries.forEach((e) => {
+        if (e.isIntersecting) { this.seen.unobserve(e.target); this.draw(e.target.scView); }
+      }), { rootMargin: "200px" }) : null;
+      document.querySelectorAll(".sc-mapview").forEach((root) => {
+        const script = data.get(root.dataset.view);
+        if (!script) { root.append(el("span", "sc-error", "no view")); return; }
+        const v = this.add(root, script);
+        if (this.seen) this.seen.observe(root); else this.draw(v);
+      });
+    }
+
+    add(root, script) {
+      const canvas = el("canvas"), bar = el("div", "sc-bar"), scale = el("div", "sc-scale");
+      const v = { root, script, canvas, scale, layer: 0, frames: 0, zoom: 1, fitted: null, buttons: [] };
+      root.scView = v;
+      MAPVIEW_LAYERS.forEach(([key, label], k) => {
+        const b = el("button", "sc-layer", label); b.dataset.layer = key;
+        b.onclick = () => this.setLayer(v, k); bar.append(b); v.buttons.push(b);
+      });
+      root.append(canvas, bar, scale);
+      this.events(v); this.views.push(v);
+      return v;
+    }
+
+    // the three.js objects of a payload, built on its first draw and shared by the views showing it
+    shape(v) {
+      const key = v.script.dataset.view;
+      if (this.shapes.has(key)) return this.shapes.get(key);
+      const T = this.T, d = JSON.parse(v.script.textContent);
+      const q = typed(d.positions, Uint16Array), pos = new Float32Array(q.length);
+      for (let i = 0; i < q.length; i++) pos[i] = d.lo[i % 3] + d.step[i % 3] * q[i];
+      const g = new T.BufferGeometry();
+      g.setAttribute("position", new T.BufferAttribute(pos, 3));
+      const rgb = new T.BufferAttribute(new Uint8Array(d.n * 3), 3, true);
+      g.setAttribute("rgb", rgb);
+      const faces = typed(d.faces, d.index === "uint32" ? Uint32Array : Uint16Array);
+      if (faces) g.setIndex(new T.BufferAttribute(faces, 1));
+      g.computeBoundingSphere(); g.computeBoundingBox();
+      const mat = this.material(!!faces, d.shading);
+      const object = faces ? new T.Mesh(g, mat) : new T.Points(g, mat);
+      const s = { d, g, object, rgb, shown: -1, centre: g.boundingSphere.center.clone(),
+        radius: g.boundingSphere.radius || 1,
+        layers: [typed(d.transfer, Uint8Array), typed(d.doubt, Uint8Array)] };
+      this.shapes.set(key, s);
+      return s;
+    }
+
+    // one material per kind (mesh, points) and shading, shared by the views
+    material(faces, shading) {
+      const key = `${faces} ${shading}`;
+      if (!this.materials.has(key)) {
+        this.materials.set(key, material(this.T, faces, shading, 3 * (window.devicePixelRatio || 1)));
+      }
+      return this.materials.get(key);
+    }
+
+    setLayer(v, k) { v.layer = k; this.draw(v); }
+
+    showScale(v, s) {
+      v.buttons.forEach((b, i) => { b.classList.toggle("sc-on", i === v.layer); b.disabled = !s.layers[i]; });
+      const c = s.d.doubt_scale;
+      v.scale.innerHTML = "";
+      if (v.layer !== 1 || !c) return;
+      const ramp = el("div", "sc-ramp");
+      ramp.style.background = `linear-gradient(to right, ${c.stops.join(", ")})`;
+      const ticks = el("div", "sc-ticks");
+      ticks.append(el("span", "", fmt(c.lo)), el("span", "", fmt(c.hi)));
+      v.scale.append(ramp, ticks); v.scale.title = c.label;
+    }
+
+    draw(v) {
+      const T = this.T, s = this.shape(v), c = v.canvas;
+      if (!s.layers[v.layer]) v.layer = 0;
+      if (s.shown !== v.layer) { s.rgb.array.set(s.layers[v.layer]); s.rgb.needsUpdate = true; s.shown = v.layer; }
+      if (v.elev === undefined) [v.elev, v.azim] = s.d.view;
+      const ratio = window.devicePixelRatio || 1, w = c.clientWidth || 160, h = c.clientHeight || 120;
+      if (c.width !== Math.round(w * ratio)) { c.width = Math.round(w * ratio); c.height = Math.round(h * ratio); }
+      this.renderer.setPixelRatio(ratio); this.renderer.setSize(w, h, false);
+      const f = viewFrame(T, v.elev, v.azim);
+      if (!v.fitted) v.fitted = fitBox(s.g.boundingBox, s.centre, f);
+      aim(this.camera, s.centre, s.radius, f, v.fitted, w / h, v.zoom);
+      this.mark.visible = !!s.d.suggest;
+      if (s.d.suggest) { this.mark.position.set(...s.d.suggest); this.mark.scale.setScalar(s.radius * 0.045); }
+      this.scene.add(s.object);
+      this.renderer.render(this.scene, this.camera);
+      this.scene.remove(s.object);
+      const ctx = c.getContext("2d");
+      ctx.clearRect(0, 0, c.width, c.height);
+      ctx.drawImage(this.renderer.domElement, 0, 0, c.width, c.height);
+      v.frames += 1; this.frames += 1;
+      this.showScale(v, s);
+    }
+
+    events(v) {
+      const c = v.canvas;
+      let drag = null, pending = false;
+      c.addEventListener("pointerdown", (e) => { drag = [e.clientX, e.clientY]; c.setPointerCapture(e.pointerId); });
+      c.addEventListener("pointerup", (e) => { drag = null; c.releasePointerCapture(e.pointerId); });
+      c.addEventListener("pointermove", (e) => {
+        if (!drag) return;
+        v.azim -= (e.clientX - drag[0]) * 0.8;
+        v.elev = Math.max(-90, Math.min(90, v.elev + (e.clientY - drag[1]) * 0.8));
+        drag = [e.clientX, e.clientY];
+        if (!pending) { pending = true; requestAnimationFrame(() => { pending = false; this.draw(v); }); }
+      });
+      c.addEventListener("dblclick", () => { v.elev = undefined; v.fitted = null; this.draw(v); });
+    }
+  }
+
   async function start() {
     const api = window.shapecond;
     try {
@@ -461,14 +600,15 @@ void main() { if (length(gl_PointCoord - 0.5) > 0.5) discard; outColour = vec4(v
         const data = JSON.parse(root.querySelector("script.sc-data").textContent);
         api.viewers.push(new Viewer(T, root, data));
       });
+      if (document.querySelector(".sc-mapview")) api.mapviews = new MapViews(T);
       api.ready = true;
     } catch (err) {
       api.error = String(err);
       console.error("shapecond viewer: " + err);
-      document.querySelectorAll(".sc-viewer").forEach((r) => r.append(el("p", "sc-error",
+      document.querySelectorAll(".sc-viewer, .sc-mapview").forEach((r) => r.append(el("p", "sc-error",
         "The 3D view could not start (" + err + "); a browser with WebGL 2 is needed.")));
     }
   }
-  window.shapecond = { viewers: [], ready: false, error: null };
+  window.shapecond = { viewers: [], mapviews: null, ready: false, error: null };
   if (document.readyState === "loading") document.addEventListener("DOMContentLoaded", start); else start();
 })();
