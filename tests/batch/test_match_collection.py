@@ -178,9 +178,24 @@ def test_match_what_is_parsed_and_keeps_older_keys():
     from shapecond.batch.rows import params_key, parse_what
 
     assert parse_what("match:x.off").match.endswith("/x.off")
+    assert parse_what("match:demo:animal").match == "demo:animal"  # a demo shape is no path
     with pytest.raises(InputError, match="one match:TEMPLATE"):
         parse_what(["match:a.off", "match:b.off"])
     assert "matcher" not in params_key({"what": ["score"]})  # a score table's key is unchanged
+
+
+def test_a_template_named_by_one_of_the_inputs(tmp_path):
+    from shapecond.batch.matches import template_path
+
+    names = {str(tmp_path / "shapes" / "cow0.off"): "cow0", str(tmp_path / "dog.ply"): "dog"}
+    assert template_path(str(tmp_path / "cow0"), names) == str(tmp_path / "shapes" / "cow0.off")
+    assert template_path(str(tmp_path / "horse"), names) == str(tmp_path / "horse")  # none: load says why
+    (tmp_path / "cow0").write_text("")  # a file of that name is what the user gave
+    assert template_path(str(tmp_path / "cow0"), names) == str(tmp_path / "cow0")
+    assert template_path("demo:animal", names) == "demo:animal"
+    from shapecond.batch.matches import MatchPlan  # the table's key and the rows' params name the file
+    options = MatchPlan(str(tmp_path / "shapes" / "cow0.off")).with_template({"what": "score,match:cow0", "seed": 1})
+    assert options == {"what": ["score", f"match:{tmp_path / 'shapes' / 'cow0.off'}"], "seed": 1}
 
 
 # --- the API -------------------------------------------------------------------------------------

@@ -39,7 +39,8 @@ it was computed for (``read_view``).
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..api.collection import (DIRECTION, PAIR_DIRECTIONS, REVERSE, listed_pairs, map_names, pair_map_name,
@@ -106,6 +107,13 @@ class MatchPlan:
         """The ``match_direction`` of each row of a unit."""
         pair = PAIR_DIRECTIONS if self.pairs is not None else (DIRECTION, REVERSE)
         return pair if self.both else pair[:1]
+
+    def with_template(self, options: dict) -> dict:
+        """``options`` with ``match:TEMPLATE`` naming the template's file (``template_path``: a template
+        given by its name among the inputs), as the table's key and the rows' params record it."""
+        if self.template is None:
+            return options
+        return {**options, "what": replace(parse_what(options["what"]), match=self.template).items()}
 
     def units(self, specs) -> list[tuple]:
         """(shape, reference) of every task: each shape with the template, each listed pair, or each shape."""
@@ -263,10 +271,20 @@ def plan_matching(specs, options: dict, out) -> MatchPlan:
     from ..shapes.landmark_files import check_in_range
 
     table = read_landmark_csv(options["landmark_table"]) if options.get("landmark_table") else None
-    loaded = api.load(what.match, largest_component=bool(options["largest_component"]), force=bool(options["force"]))
-    template_lm = template_landmarks(what.match, table)
+    template = template_path(what.match, names)
+    loaded = api.load(template, largest_component=bool(options["largest_component"]), force=bool(options["force"]))
+    template_lm = template_landmarks(template, table)
     if not hasattr(loaded, "ids"):
-        raise InputError(f"{what.match}: the template must be a mesh or point cloud, not a distance matrix")
-    check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {what.match}")
+        raise InputError(f"{template}: the template must be a mesh or point cloud, not a distance matrix")
+    check_in_range(template_lm.values(), int(loaded.ids.max()) + 1, f"the template {template}")
     found, errors = _shape_landmarks(specs, table)
-    return MatchPlan(what.match, template_lm, found, errors, names, maps_dir, both=both)
+    return MatchPlan(template, template_lm, found, errors, names, maps_dir, both=both)
+
+
+def template_path(template: str, names: dict) -> str:
+    """``match:TEMPLATE``'s shape: the path as given, or, when no such file exists, the one input whose
+    name (``NAME`` of ``maps/NAME.txt``) it gives (``match:cow0`` for ``shapes/cow0.off``)."""
+    if template.startswith("demo:") or os.path.lexists(template):
+        return template
+    named = [spec for spec, name in names.items() if name == Path(template).name]
+    return str(named[0]) if len(named) == 1 else template

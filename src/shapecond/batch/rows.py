@@ -91,7 +91,8 @@ def parse_what(items) -> What:
         elif (p.startswith("match:") and p[6:]) or p == "match":
             if match is not None or pairs:
                 raise InputError("--what: one match:TEMPLATE (or one match, with --pairs) per batch")
-            match, pairs = (os.path.abspath(p[6:]), False) if p != "match" else (None, True)
+            t = p[6:]
+            match, pairs = ((t if t.startswith("demo:") else os.path.abspath(t)), False) if p != "match" else (None, True)
         else:
             raise InputError(f"--what {p!r}: choose score, local, landmarks:K:METHOD, match:TEMPLATE or match "
                              "(with --pairs)")

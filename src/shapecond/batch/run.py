@@ -126,6 +126,7 @@ def run_batch(inputs, out, options=None, what=("score",), how: BatchRun = BatchR
     check_where(how.n_jobs, how.scheduler)
     specs = expand_inputs(inputs)
     plan = plan_matching(specs, options, out)
+    options = plan.with_template(options)
     units = plan.units(specs)
     with Table(out, how.mode) as table:
         hashes = dict(zip(specs, content_hashes(specs)))

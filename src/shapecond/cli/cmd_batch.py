@@ -28,8 +28,8 @@ EXIT_SOME_FAILED = 3
               show_default=True, help="Work spent by the witness searches.")
 @click.option("--what", "what", multiple=True, default=("score",), show_default=True,
               help="What to compute besides info, repeatable or comma-separated: score, local, "
-                   "landmarks:K:METHOD (e.g. landmarks:5:fps), match:TEMPLATE (the template matched to every "
-                   "shape with the landmarks of NAME.lmk files or --landmarks; maps in maps/ and report.html "
+                   "landmarks:K:METHOD (e.g. landmarks:5:fps), match:TEMPLATE (the template, a file or the name of one "
+                   "of the inputs, matched to every shape with the landmarks of NAME.lmk files or --landmarks; maps in maps/ and report.html "
                    "beside --out).")
 @click.option("--matcher", type=click.Choice(MATCHERS), default=None,
               help="match:TEMPLATE: the sample matcher of shapecond match [default: lh05].")
