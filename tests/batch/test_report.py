@@ -25,6 +25,17 @@ def test_the_annotate_more_list_puts_the_largest_bar_first_and_every_map_is_list
     assert "3 of them say <b>annotate more</b>, 1 failed" in page and "no landmarks for this shape" in every
 
 
+def test_the_template_vertex_most_often_suggested_is_one_landmark_for_the_collection():
+    rows = [_row("a", 0.3, suggest_source_id=41), _row("b", 0.2, suggest_source_id=41),
+            _row("c", 0.1, suggest_source_id=7), _row("fine", 0.01, suggest_source_id=7),
+            _row("back", 0.4, suggest_source_id=7)]
+    rows[-1]["match_direction"] = "shape to template"
+    page = report_html(rows)
+    assert "template vertex 41 is the next landmark of 2 of the 3 maps listed" in page  # "fine": not listed,
+    rows[1]["suggest_source_id"] = 8                                                    # "back": a shape's id
+    assert "One landmark for the collection" not in report_html(rows)  # no vertex shared by two maps
+
+
 def _fake_view(size: int) -> dict:
     """A stand-in view payload of about ``size`` bytes (the report reads only its size)."""
     return {"format": 1, "n": 1, "pad": "x" * size}
