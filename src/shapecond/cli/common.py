@@ -6,9 +6,12 @@
 (infinite values as the string "inf", missing ones as null).  Numeric options
 use the parameter types ``Int``, ``Float`` and ``SEED``, which call the checks
 of ``shapecond.checks``: a bad value gets the same one-line message as from
-the Python functions.  Every sub-command is a :class:`Command`: before it runs,
-the files it writes (options of type :class:`OutputFile`) are checked against
-the files it reads and against each other (``output.check_distinct``).
+the Python functions.  An option declared in a parameter table (``api.params``:
+``match``'s, and the shared ``--seed``, ``--geodesic-backend``, ...) is made by
+``param_option`` (a whole table: ``table_options``), with its name, default,
+help and check from the table.  Every sub-command is a :class:`Command`: before
+it runs, the files it writes (options of type :class:`OutputFile`) are checked
+against the files it reads and against each other (``output.check_distinct``).
 """
 
 from __future__ import annotations
