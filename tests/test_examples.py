@@ -9,7 +9,7 @@ import pytest
 import shapecond
 
 MODULES = ["shapecond.api.inputs", "shapecond.api.scores", "shapecond.api.problem", "shapecond.api.settings",
-           "shapecond.api.matching", "shapecond.api.level", "shapecond.api.collection",
+           "shapecond.api.matching", "shapecond.api.level", "shapecond.api.collection", "shapecond.api.params",
            "shapecond.matching.problem", "shapecond.evaluation.run", "shapecond.checks", "shapecond.jsonable", "shapecond.output",
            "shapecond.symmetry.verdict"]
 

@@ -280,14 +280,52 @@ BAD_OPTIONS = [
     ("--trials", ["0", "-1", "1e3"], ["kappa", GOOD, "--points", "5", "--no-cache"]),
     ("-k", ["-1", "x"], ["landmarks", GOOD, "--method", "fps"] + SMALL),
     ("--resolve-fraction", ["2", "nan", "-0.5"], ["heatmap", GOOD] + SMALL + ["--png", "OUT.png"]),
-    ("--k", ["0", "-1"], ["match", GOOD, GOOD, "--landmarks-source", "1", "--landmarks-target", "1",
-                          "--points", "8", "--no-cache", "-o", "OUT.txt"]),
     ("--jobs", ["0", "-3"], ["evaluate", "DATASET", "--out", "OUT_DIR"]),
     ("--max-targets", ["-1", "0"], ["evaluate", "DATASET", "--out", "OUT_DIR"]),
     ("--points", ["0", "-1"], ["evaluate", "DATASET", "--out", "OUT_DIR"]),
     ("--delta", ["nan", "inf", "5"], ["demo", "--out", "OUT_DIR"]),
     ("--landmark-points", ["1", "-1"], ["demo", "--out", "OUT_DIR"]),
 ]
+
+#: ``shapecond match`` around a bad option value of its table (``api.matching.MATCH_PARAMS``, ``match_option_cases``).
+MATCH_ARGV = ["match", GOOD, GOOD, "--landmarks-source", "1", "--landmarks-target", "1", "--points", "8", "--no-cache",
+              "-o", "OUT.txt"]
+
+
+def bad_values(constraint, cli: bool) -> list:
+    """Values a constraint of ``shapecond.api.params`` refuses: command-line words (``cli``) or Python values
+    (past each end of a range, a fraction, a word, NaN, a boolean, None where None is not allowed)."""
+    from shapecond.api.params import Choice, Flag, FloatRange, IntRange
+
+    if isinstance(constraint, (Choice, Flag)):
+        words = ["magic"] if isinstance(constraint, Choice) else []  # a flag takes no word
+        return words if cli else ["magic", 1, None]
+    ends = [constraint.lo - (0 if getattr(constraint, "lo_open", False) else 1)] if constraint.lo is not None else []
+    ends += [constraint.hi + (0 if getattr(constraint, "hi_open", False) else 1)] if constraint.hi is not None else []
+    odd = [1.5] if isinstance(constraint, IntRange) else [float("nan"), float("inf")]
+    if cli:
+        return [str(v) for v in ends + odd] + ["x"]
+    return ends + odd + ["x", True] + ([] if constraint.none else [None])
+
+
+def match_option_cases(cli: bool) -> list[tuple[str, object, object, dict]]:
+    """(class, the row of ``MATCH_PARAMS``, bad value, the other keywords of ``sc.match``) for every bad value of
+    every row (``bad_values``; on the command line, rows that have an option there), each with the matcher the row
+    belongs to; and every option of a sample matcher with a matcher that has no such option (Python only)."""
+    from shapecond.api.matching import MATCH_PARAMS, inapplicable
+
+    cases = []
+    for p in MATCH_PARAMS:
+        if cli and not p.cli:
+            continue
+        own = {"matcher": p.feeds[0]} if p.feeds[0] in ("lh05", "faq") else {}
+        cases += [(f"match {p.name} {v!r}", p, v, own) for v in bad_values(p.constraint, cli)]
+        if not cli:
+            cases += [(f"match {p.name} with matcher {m}", p, p.default, {"matcher": m})
+                      for m in ("lh05", "faq", "zoomout")
+                      if not any(q.name == p.name and q.feeds[0] not in inapplicable(m) for q in MATCH_PARAMS)]
+    return cases
+
 
 #: Commands that read an INPUT, each with the arguments that make it cheap.
 SHAPE_COMMANDS = {
@@ -358,6 +396,9 @@ def cli_cases(folder) -> list[tuple[str, list[str]]]:
                     (good / f"shape{k}.off").write_text(_off(TETRA_V, TETRA_F))
                 argv[1] = str(good.parent)
             add(f"option {option} {v}", argv + [option, v])
+    for cls, p, v, own in match_option_cases(cli=True):
+        add(f"option {cls}", MATCH_ARGV + [w for k, m in own.items() for w in (f"--{k}", m)] + [p.cli[0], v])
+    add("option match unknown --zoomout-stp", MATCH_ARGV + ["--zoomout-stp", "3"])
     for name in ("sym_binary.sym", "sym_zero.sym", "sym_fraction.sym", "sym_short.sym"):
         add(f"symmetry map {name}", ["score", GOOD, "--symmetry-map", str(f[name])] + SMALL)
     for kind in ("empty", "off_only", "garbage", "binary"):
@@ -511,6 +552,9 @@ def api_cases(folder) -> list[tuple[str, object]]:
           for e in ("abc", float("inf"), float("nan"), -1.0)],
         *[(f"landmarks {m} epsilon {e!r}", lambda m=m, e=e: sc.landmarks(GOOD, 2, m, 8, epsilon=e, cache=False))
           for m in ("fps", "cnbs-scale") for e in ("abc", float("inf"), float("nan"))],
+        *[(cls, lambda name=p.name, v=v, own=own: sc.match(GOOD, GOOD, [0], [0], **{"n_points": 8, "cache": False,
+                                                                                **own, name: v}))
+          for cls, p, v, own in match_option_cases(cli=False)],
         ("match zoomout with 2 landmarks", lambda: sc.match(GOOD, GOOD, [0, 1], [0, 1], matcher="zoomout",
                                                            cache=False)),
         ("match zoomout on matrices", lambda: sc.match(np.ones((4, 4)) - np.eye(4), np.ones((4, 4)) - np.eye(4),

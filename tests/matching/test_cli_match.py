@@ -143,3 +143,16 @@ def test_the_error_bar_is_in_the_summary_and_its_doubt_field_in_a_ply(files, cap
                          "--landmarks-target", "0,20,300", "--points", 80, "-o", d / "nobar.txt", "--no-error-bar",
                          "--json")
     assert code == 0 and "error_bar" not in json.loads(out)
+
+
+def test_the_page_s_command_repeats_every_option_that_differs_from_its_default():
+    from shapecond.api.matching import MATCH_PARAMS
+    from shapecond.cli.cmd_match import _repeated_options
+
+    o = {p.name: p.default for p in MATCH_PARAMS}
+    o.update(k=10, refine=False, cache=False, largest_component=True, zoomout_step=5, n_points=80)
+    assert _repeated_options(o, "same-ids") == ["--points", 80, "--k", 10, "--no-refine", "--zoomout-step", 5,
+                                                "--largest-component", "--no-cache", "--truth", "same-ids"]
+    o.update(matcher="faq")  # --k and --no-refine are lh05's: not passed to faq, not repeated
+    assert _repeated_options(o, None) == ["--matcher", "faq", "--points", 80, "--zoomout-step", 5,
+                                          "--largest-component", "--no-cache"]

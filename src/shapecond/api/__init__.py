@@ -14,7 +14,8 @@ every door.
 * ``problem``: ``SymmetryProblem``, one shape whose searches are kept for
   repeated queries;
 * ``settings``: ``score_settings``, the checked settings of both kinds of score;
-* ``matching``: ``match``, a dense map between two shapes guided by landmarks;
+* ``matching``: ``match``, a dense map between two shapes guided by landmarks, and its options'
+  table ``MATCH_PARAMS`` (``params``: each option declared once, with its constraint);
 * ``collection``: ``match_collection``, one template matched to every shape of a collection with the
   landmarks named in files (``shapes.landmark_files``);
 * ``level``: ``deformation_level``, the distortion level ε̂ of a shape against

@@ -96,12 +96,13 @@ def deformation_level(x, others, *, landmarks=(), landmarks_others=None, matcher
     True
     """
     t0 = time.perf_counter()
-    refused = [k for k in ("error_bar", "dense", "samples", "suggest") if k in options]  # match's, meaningless here
+    refused = [k for k in options if k in ("error_bar", "dense", "samples", "suggest")
+               or k.startswith("zoomout_")]  # match's, meaningless here (the level reads the sample map)
     if refused:
         raise InputError(f"deformation_level() got unknown option {refused[0]!r}")
     if matcher == "zoomout":
         raise InputError("the level is read off a sample matcher's map: matcher 'faq' or 'lh05', not 'zoomout'")
-    opts, flags = match_options(matcher, n_points, "nearest", "fps", dict(options))
+    opts, flags = match_options(dict(options, matcher=matcher, n_points=n_points, dense="nearest"), "deformation_level")
     others = list(others) if isinstance(others, list) else [others]
     if not others:
         raise InputError("deformation_level needs at least one other shape")

@@ -2,62 +2,118 @@
 
 from __future__ import annotations
 
-from dataclasses import fields
-
 import numpy as np
 
-from ..checks import check_choice, check_flag, check_int, check_seed, parse_ids
+from ..checks import parse_ids
 from ..errors import InputError
 from ..matching.candidates import check_landmarks
-from ..matching.pipeline import MATCHERS, MatchOptions, match_samples
+from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLE_MATCHERS, SAMPLINGS, MatchOptions, match_samples
 from ..matching.problem import MatchProblem
 from ..matching.seeded import FAQOptions
 from ..matching.spectral import LH05Options
+from ..matching.zoomout import ZoomOutOptions
 from .guards import guard_match
 from .inputs import DEFAULT_POINTS, load
-from .options import BACKENDS
+from .params import (BACKEND, CACHE, FORCE, LARGEST_COMPONENT, MAX_POINTS, SEED, Choice, Flag, FloatRange, IntRange,
+                     Param, check_keywords, grouped)
 from .results import MatchResult
 
-#: Keywords of ``match`` besides the matcher's own options.
-_SETTINGS = {"seed": 0, "backend": "heat", "cache": True, "force": False, "largest_component": False,
-             "error_bar": True, "suggest": 0}
+_ZOOMOUT = "The ZoomOut dense stage (--dense zoomout, --matcher zoomout): "
+_POSITIVE = FloatRange(0, lo_open=True)
+_POSITIVE_OR_NONE = FloatRange(0, lo_open=True, none=True)
 
-
-#: The options dataclass each sample matcher declares its options in.
+#: The options of ``match``, each declared once (``params``): the command line's ``shapecond match``
+#: options and ``match``'s keywords are made from it.  Feeds: "match" ``MatchOptions``, "zoomout" its
+#: ``ZoomOutOptions`` (the dense stage; prefixed ``zoomout_`` since ``k`` and ``sigma`` are LH05's),
+#: "lh05" ``LH05Options`` and "faq" ``FAQOptions`` (the sample matcher's: with that matcher only),
+#: "call" the call's own settings.
+MATCH_PARAMS = (
+    Param("matcher", Choice(MATCHERS), "lh05",
+          "lh05: Leordeanu-Hebert spectral matching of the samples (the paper); faq: seeded graph matching of the "
+          "samples; zoomout: from the landmarks alone (at least 3), by the dense stage.", ("match", None),
+          ("--matcher",)),
+    Param("n_points", IntRange(3, MAX_POINTS), DEFAULT_POINTS, "Number of farthest-point samples N.",
+          ("match", None), ("--points", "-n")),
+    SEED, BACKEND,
+    Param("k", IntRange(1, 10_000), 20, "lh05: candidate target samples per source sample.", ("lh05", None), ("--k",)),
+    Param("rounding", Choice(("greedy", "assignment")), "assignment",
+          "lh05: a linear assignment or the paper's greedy discretisation.", ("lh05", None), ("--rounding",)),
+    Param("refine", Flag(), True, "lh05: refine the rounded map on its own objective, with spectral rounds on "
+          "candidates iterated from it (--no-refine --rounding greedy: the paper's plain LH05).", ("lh05", None),
+          ("--refine/--no-refine",)),
+    Param("samples", Choice(SAMPLINGS), "fps",
+          "fps: each shape gets its own farthest-point samples; same-ids: the target is sampled at the source's "
+          "sample vertices (shapes with a common vertex order; the evaluation's corresponding protocol) and the "
+          "summary reports the sample map's error.", ("match", None), ("--samples",)),
+    Param("dense", Choice(DENSE_STAGES), "zoomout",
+          "How the map reaches every source vertex: zoomout (the sample map extended, then refined by ZoomOut on "
+          "the Laplace-Beltrami bases with the landmarks as anchors), or the plain extensions of the sample map "
+          "(distances: local distance matching; nearest: nearest sample).", ("match", None), ("--dense",)),
+    Param("zoomout_k_start", IntRange(1, 10_000), 20, _ZOOMOUT + "basis functions of its first functional map.",
+          ("zoomout", "k_start"), ("--zoomout-k-start",)),
+    Param("zoomout_k_end", IntRange(1, 10_000, none=True), None,
+          _ZOOMOUT + "basis functions of its last functional map.", ("zoomout", "k_end"), ("--zoomout-k-end",),
+          "the whole basis"),
+    Param("zoomout_step", IntRange(1, 10_000), 10, _ZOOMOUT + "growth of the basis per iteration.",
+          ("zoomout", "step"), ("--zoomout-step",)),
+    Param("zoomout_subsample_factor", IntRange(1, 10_000), 10,
+          _ZOOMOUT + "source points per basis function in its iterations.", ("zoomout", "subsample_factor"),
+          ("--zoomout-subsample-factor",)),
+    Param("zoomout_sigma", _POSITIVE_OR_NONE, None,
+          _ZOOMOUT + "width of the landmark anchors, in units of sqrt(area).", ("zoomout", "sigma"),
+          ("--zoomout-sigma",), "pi / sqrt(eigenvalue) of the last basis function"),
+    Param("error_bar", Flag(), True,
+          "Estimate the map's error without ground truth: δ(ε̂) on SOURCE with the landmarks fixed, ε̂ the map's own "
+          "RMS distortion (in the summary; the doubt field with --doubt-ply, --doubt-png).", cli=("--error-bar/--no-error-bar",)),
+    LARGEST_COMPONENT, CACHE,
+    Param("suggest", IntRange(0, 1000), 0,
+          "Suggest this many next landmarks, read off the map and its error bar (each with its provisional image and "
+          "the bar expected after it): click them, add them to the landmarks, re-run.", cli=("--suggest",)),
+    FORCE,
+    # the sample matchers' other options: Python only
+    Param("sigma", _POSITIVE_OR_NONE, None,
+          "lh05: width of the first round's affinity [default: sigma_factor x h].", ("lh05", None)),
+    Param("sigma_factor", _POSITIVE, 2.0, "lh05: see sigma.", ("lh05", None)),
+    Param("rounds", IntRange(1, 1000), 3, "lh05: at most this many spectral rounds of the refinement.", ("lh05", None)),
+    Param("quantile_weight", FloatRange(0), 0.5, "lh05: weight of the descriptors' intrinsic part.", ("lh05", None)),
+    Param("tol", _POSITIVE, 1e-7, "lh05: tolerance of the first round's power iteration.", ("lh05", None)),
+    Param("max_iter", IntRange(1, 100_000), 500, "lh05: iterations of the first round's power iteration.",
+          ("lh05", None)),
+    Param("nested", Flag(), True, "lh05: with more than 3 landmarks, also match with the first 3; keep the better.",
+          ("lh05", None)),
+    Param("objective", Choice(("distance", "gaussian")), "distance", "faq: the objective.", ("faq", None)),
+    Param("init", Choice(("descriptor", "barycenter")), "descriptor", "faq: the start.", ("faq", None)),
+    Param("sigma", _POSITIVE_OR_NONE, None,
+          "faq: kernel width of the gaussian objective [default: from sigma_factor].", ("faq", None)),
+    Param("sigma_factor", _POSITIVE, 3.0, "faq: see sigma.", ("faq", None)),
+    Param("quantile_weight", FloatRange(0), 0.5, "faq: weight of the descriptors' intrinsic part.", ("faq", None)),
+    Param("maxiter", IntRange(1, 100_000), 60, "faq: Frank-Wolfe iterations.", ("faq", None)),
+    Param("nested", Flag(), True, "faq: with more than 3 landmarks, also solve with the first 3; keep the better.",
+          ("faq", None)),
+)
+#: The options object of each sample matcher (the "lh05" and "faq" rows of ``MATCH_PARAMS``).
 _DECLARED = {"lh05": LH05Options, "faq": FAQOptions}
 
 
-def _matcher_options(matcher: str, options: dict, seed: int):
-    """The sample matcher's options object (``LH05Options`` or ``FAQOptions``, FAQ's seeded by ``seed``;
-    None for zoomout) from ``match``'s other keywords, an unknown one refused before any work."""
-    check_choice(matcher, "matcher", MATCHERS)
-    declared = _DECLARED.get(matcher)  # zoomout declares none
-    known = set() if declared is None else {f.name for f in fields(declared)} - {"seed"}  # seed: match's own
-    if set(options) - known:  # refused before the geodesics, not as a TypeError after them
-        raise InputError(f"match() got unknown option {sorted(set(options) - known)[0]!r} for matcher "
-                         f"{matcher!r} (its options: {', '.join(sorted(known)) or 'none'})")
-    if declared is None:
-        return None
-    return declared(**options, **({"seed": seed} if declared is FAQOptions else {}))
+def inapplicable(matcher: str) -> list:
+    """The rows of ``MATCH_PARAMS`` that do not apply with ``matcher`` (its ``feeds``): the other sample
+    matchers' options."""
+    return [m for m in SAMPLE_MATCHERS if m != matcher]
 
 
-def match_options(matcher, n_points, dense, samples, options: dict):
-    """``MatchOptions`` and the load settings from ``match``'s keywords (each checked once; ``options`` is
-    emptied of them, and of the matcher's own options)."""
-    settings = {k: options.pop(k, v) for k, v in _SETTINGS.items()}
-    seed = check_seed(settings["seed"])
-    if "k" in options:
-        options["k"] = check_int(options["k"], "k", lo=1)
-    opts = MatchOptions(matcher=matcher, n_points=check_int(n_points, "n_points", lo=3),
-                        backend=check_choice(settings["backend"], "backend", BACKENDS),
-                        seed=seed, dense=dense, samples=samples,
-                        cache=check_flag(settings["cache"], "cache"),
-                        matcher_options=_matcher_options(matcher, options, seed))
-    flags = {k: check_flag(settings[k], k) for k in ("largest_component", "force", "error_bar")}
-    flags["suggest"] = check_int(settings["suggest"], "suggest", lo=0)
+def match_options(keywords: dict, caller: str = "match") -> tuple[MatchOptions, dict]:
+    """``MatchOptions`` and the call's settings (``force``, ``largest_component``, ``error_bar``, ``suggest``)
+    from the keywords of ``match`` (``MATCH_PARAMS``), each checked once before any work; a keyword of
+    no row, or of another matcher's row, refused."""
+    matcher = MATCH_PARAMS[0].check(keywords.get("matcher", "lh05"))
+    values = check_keywords(MATCH_PARAMS, keywords, caller, inapplicable(matcher), f" for matcher {matcher!r}")
+    groups = grouped(MATCH_PARAMS, values)
+    flags = groups["call"]
     if flags["suggest"] and not flags["error_bar"]:
         raise InputError("suggesting landmarks reads the error bar: it needs error_bar=True")
-    return opts, flags
+    own = None if matcher not in _DECLARED else _DECLARED[matcher](
+        **groups[matcher], **({"seed": values["seed"]} if matcher == "faq" else {}))  # FAQ is seeded by match's seed
+    return MatchOptions(**groups["match"], zoomout=ZoomOutOptions(**groups["zoomout"]), matcher_options=own), flags
 
 
 def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
@@ -96,9 +152,13 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
         ``error_bar`` (default True: also estimate the map's error without ground truth,
         ``matching.error_bar``: the mean displacement of δ(ε̂)'s witness on the source, ε̂ the
         map's own distortion), ``suggest`` (how many next landmarks to suggest, ``matching.suggest``; needs
-        the error bar; in the summary as ``"suggestions"``, and ``.suggest(k)`` later) and the sample
-        matcher's own options (lh05: ``k``, ``rounding``,
-        ``refine``...).
+        the error bar; in the summary as ``"suggestions"``, and ``.suggest(k)`` later), the dense
+        stage's ``zoomout_k_start``, ``zoomout_k_end``, ``zoomout_step``, ``zoomout_subsample_factor``
+        and ``zoomout_sigma`` (``matching.zoomout.ZoomOutOptions``; used with ``dense="zoomout"`` or
+        ``matcher="zoomout"``) and the sample matcher's own options (lh05: ``k``, ``rounding``,
+        ``refine``...; faq: ``objective``, ``init``...).  Every keyword, its constraint and default:
+        ``MATCH_PARAMS``; a bad value or an unknown keyword is refused before any work.
+
     Returns
     -------
     MatchResult: ``.map[i]`` the target id of source id i (-1: a vertex dropped on loading),
@@ -113,8 +173,7 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     >>> r.map.shape[0] == sc.load(shape).n_vertices
     True
     """
-    options = dict(options)
-    opts, flags = match_options(matcher, n_points, dense, options.pop("samples", "fps"), options)
+    opts, flags = match_options(dict(options, matcher=matcher, n_points=n_points, dense=dense))
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     src, tgt = load_pair(source, target, flags)
     summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}

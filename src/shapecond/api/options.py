@@ -17,8 +17,6 @@ from ..errors import InputError
 from ..selection import CNBS_EXTRAS, COMMON_OPTIONS, SCORES, LandmarkOptions, check_method_options, own_options_class
 from ..shapes.metric import Sampling
 
-#: Geodesic backends a user may ask for (``shapes.geodesics``; "euclidean" comes with ``metric``).
-BACKENDS = ("heat", "fmm", "exact")
 EFFORTS = ("quick", "default", "thorough")
 
 

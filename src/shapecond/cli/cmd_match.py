@@ -11,13 +11,11 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLINGS
+from ..api.matching import MATCH_PARAMS, inapplicable
 from ..checks import parse_ids
 from ..errors import InputError
 from ..output import atomic_open
-from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, SEED_OPTION, Command, Int, OutputFile,
-                     emit_json, force_option, info, json_option, points_option)
-
+from .common import Command, OutputFile, emit_json, info, json_option, table_options
 
 @click.command("match", cls=Command)
 @click.argument("source", metavar="SOURCE")
@@ -26,42 +24,14 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
               help="Landmark vertex ids on SOURCE (comma-separated, or a file of ids).")
 @click.option("--landmarks-target", required=True,
               help="The corresponding vertex ids on TARGET, in the same order.")
-@click.option("--matcher", type=click.Choice(MATCHERS), default="lh05", show_default=True,
-              help="lh05: Leordeanu-Hebert spectral matching of the samples (the paper); faq: seeded graph "
-                   "matching of the samples; zoomout: from the landmarks alone (at least 3), by the dense stage.")
-@points_option(400)
-@SEED_OPTION
-@BACKEND_OPTION
-@click.option("--k", "k", type=Int(1, 10_000), default=20, show_default=True,
-              help="lh05: candidate target samples per source sample.")
-@click.option("--rounding", type=click.Choice(["greedy", "assignment"]), default="assignment",
-              show_default=True, help="lh05: a linear assignment or the paper's greedy discretisation.")
-@click.option("--refine/--no-refine", default=True, show_default=True,
-              help="lh05: refine the rounded map on its own objective, with spectral rounds on candidates "
-                   "iterated from it (--no-refine --rounding greedy: the paper's plain LH05).")
-@click.option("--samples", type=click.Choice(SAMPLINGS), default="fps", show_default=True,
-              help="fps: each shape gets its own farthest-point samples; same-ids: the target is sampled "
-                   "at the source's sample vertices (shapes with a common vertex order; the evaluation's "
-                   "corresponding protocol) and the summary reports the sample map's error.")
-@click.option("--dense", type=click.Choice(DENSE_STAGES), default="zoomout", show_default=True,
-              help="How the map reaches every source vertex: zoomout (the sample map extended, then refined by "
-                   "ZoomOut on the Laplace-Beltrami bases with the landmarks as anchors), or the plain "
-                   "extensions of the sample map (distances: local distance matching; nearest: nearest sample).")
-@click.option("--error-bar/--no-error-bar", default=True, show_default=True,
-              help="Estimate the map's error without ground truth: δ(ε̂) on SOURCE with the landmarks fixed, ε̂ "
-                   "the map's own RMS distortion (in the summary; the doubt field with --doubt-ply, --doubt-png).")
+@table_options(MATCH_PARAMS)
+@click.option("-o", "--output", required=True, type=OutputFile(),
+              help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
 @click.option("--doubt-png", type=OutputFile(), default=None,
               help="Picture of SOURCE coloured by the error bar's doubt field (PNG), landmarks ringed.")
 @click.option("--doubt-ply", type=OutputFile(), default=None,
               help="SOURCE coloured by the error bar's doubt field: how far the widest map as distorted as this "
                    "one moves each point (PLY).")
-@LARGEST_COMPONENT_OPTION
-@NO_CACHE_OPTION
-@click.option("-o", "--output", required=True, type=OutputFile(),
-              help="Map file: line i holds the TARGET vertex id matched to SOURCE vertex i.")
-@click.option("--suggest", type=Int(0, 1000), default=0, show_default=True,
-              help="Suggest this many next landmarks, read off the map and its error bar (each with its provisional "
-                   "image and the bar expected after it): click them, add them to the landmarks, re-run.")
 @click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the map: colours carried source -> target, linked landmarks.")
 @click.option("--truth", default=None,
@@ -70,7 +40,6 @@ from .common import (BACKEND_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION, 
                    "vertex order), or SOURCE.vts,TARGET.vts, the two shapes' reference files of a remeshed "
                    "release (the error is then known at the source's reference vertices). Read and checked "
                    "before matching.")
-@force_option
 @json_option
 def command(source, target, landmarks_source, landmarks_target, output, **o):
     """Match SOURCE to TARGET with corresponding landmarks fixed; write the dense map.
@@ -87,14 +56,10 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     if (o["doubt_ply"] or o["doubt_png"] or o["suggest"]) and not o["error_bar"]:
         raise InputError("--doubt-ply, --doubt-png and --suggest read the error bar: drop --no-error-bar")
     t0 = time.perf_counter()
-    lh05 = {k: o[k] for k in ("k", "rounding", "refine")} if o["matcher"] == "lh05" else {}
     ids_s, ids_t = parse_ids(landmarks_source, "--landmarks-source"), parse_ids(landmarks_target, "--landmarks-target")
     truth_text = o["truth"]
     shapes = _surfaces_up_front(source, target, o)
-    result = match(*shapes, ids_s, ids_t, matcher=o["matcher"], n_points=o["points"],
-                   seed=o["seed"], backend=o["geodesic_backend"], dense=o["dense"], samples=o["samples"],
-                   cache=not o["no_cache"], force=o["force"], largest_component=o["largest_component"],
-                   error_bar=o["error_bar"], suggest=o["suggest"], **lh05)
+    result = match(*shapes, ids_s, ids_t, **{p.name: o[p.name] for p in _passed(o["matcher"])})
     out = Path(output)
     with atomic_open(out) as fh:
         np.savetxt(fh, result.map, fmt="%d")
@@ -120,14 +85,24 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
                  f"bar after it {s['bar_after']:.3g} sqrt(area)")
 
 
+def _passed(matcher: str) -> list:
+    """The rows of ``MATCH_PARAMS`` on the command line that apply with ``matcher`` (an option of another
+    sample matcher, e.g. --k with --matcher faq, is not passed on)."""
+    off = inapplicable(matcher)
+    return [p for p in MATCH_PARAMS if p.cli and p.feeds[0] not in off]
+
+
 def _repeated_options(o: dict, truth_text) -> list:
-    """The options of this run that the page's command repeats (those that change the map or the page)."""
+    """The options of this run that the page's command repeats: those that differ from their defaults."""
     words = []
-    for name, flag, default in (("matcher", "--matcher", "lh05"), ("points", "--points", 400),
-                                ("dense", "--dense", "zoomout"), ("samples", "--samples", "fps"),
-                                ("suggest", "--suggest", 0), ("seed", "--seed", 0)):
-        if o.get(name) != default:
-            words += [flag, o[name]]
+    for p in _passed(o["matcher"]):
+        value = o[p.name]
+        if value == p.default:
+            continue
+        if isinstance(value, bool):  # a flag: its form for this value (--no-refine, --no-cache, --force)
+            words.append(next(w for d in p.cli for w in d.split("/") if w.startswith("--no-") != value))
+        else:
+            words += [p.cli[0], value]
     return words + (["--truth", truth_text] if truth_text is not None else [])
 
 

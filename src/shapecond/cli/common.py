@@ -6,9 +6,12 @@
 (infinite values as the string "inf", missing ones as null).  Numeric options
 use the parameter types ``Int``, ``Float`` and ``SEED``, which call the checks
 of ``shapecond.checks``: a bad value gets the same one-line message as from
-the Python functions.  Every sub-command is a :class:`Command`: before it runs,
-the files it writes (options of type :class:`OutputFile`) are checked against
-the files it reads and against each other (``output.check_distinct``).
+the Python functions.  An option declared in a parameter table (``api.params``:
+``match``'s, and the shared ``--seed``, ``--geodesic-backend``, ...) is made by
+``param_option`` (a whole table: ``table_options``), with its name, default,
+help and check from the table.  Every sub-command is a :class:`Command`: before
+it runs, the files it writes (options of type :class:`OutputFile`) are checked
+against the files it reads and against each other (``output.check_distinct``).
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ import sys
 import click
 
 from ..api import DEFAULT_POINTS
+from ..api.params import BACKEND, CACHE, FORCE, LARGEST_COMPONENT, MAX_POINTS, Choice, Flag, IntRange, Param
+from ..api.params import SEED as SEED_PARAM
 from ..checks import check_float, check_int, check_seed
 from ..errors import InputError
 from ..jsonable import dumps
@@ -111,10 +116,6 @@ class Command(click.Command):
         return super().invoke(ctx)
 
 
-#: Largest N accepted by the options (the memory and time guards refuse far less).
-MAX_POINTS = 100_000
-
-
 def info(message: str) -> None:
     """A diagnostic line on stderr (stdout is kept for results)."""
     click.echo(message, err=True)
@@ -132,13 +133,43 @@ def points_option(default: int | None = None):
                              ("." if default is not None else f" [default: {DEFAULT_POINTS}]."))
 
 
-#: The options several commands share, each declared here once.
-SEED_OPTION = click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random choice.")
-BACKEND_OPTION = click.option("--geodesic-backend", type=click.Choice(["heat", "fmm", "exact"]), default="heat",
-                              show_default=True, help="Geodesic solver (exact needs the 'exact' extra).")
-LARGEST_COMPONENT_OPTION = click.option("--largest-component", is_flag=True,
-                                        help="Keep only the largest connected component.")
-NO_CACHE_OPTION = click.option("--no-cache", is_flag=True, help="Do not read or write the distance cache.")
+def param_option(param: Param, dest: str | None = None):
+    """The click option of ``param`` (``api.params``), its value checked by the same constraint.
+
+    ``dest``: the name the command reads the value under (default: the Python keyword).  A flag
+    ``--x/--no-x`` gives True or False; a lone ``--no-x`` gives False when given (the Python value),
+    except under another ``dest`` (``no_cache``: the commands not yet made from a table read the
+    flag itself).  An option whose default is None shows ``param.cli_default`` as its default.
+    """
+    dest, c = dest or param.name, param.constraint
+    if isinstance(c, Flag):
+        if "/" in param.cli[0]:
+            return click.option(*param.cli, dest, default=param.default, show_default=True, help=param.help)
+        if param.cli[0].startswith("--no-") and dest == param.name:
+            return click.option(*param.cli, dest, flag_value=not param.default, default=param.default,
+                                help=param.help)
+        return click.option(*param.cli, dest, is_flag=True, help=param.help)
+    kind = (click.Choice(c.choices) if isinstance(c, Choice) else Int(c.lo, c.hi) if isinstance(c, IntRange)
+            else Float(c.lo, c.hi, c.lo_open, c.hi_open))
+    if param.default is None:
+        shown = f" [default: {param.cli_default}]" if param.cli_default else ""
+        return click.option(*param.cli, dest, type=kind, default=None, help=param.help + shown)
+    return click.option(*param.cli, dest, type=kind, default=param.default, show_default=True, help=param.help)
+
+
+def table_options(table):
+    """The click options of every row of ``table`` (a sequence of ``Param``) that has a command-line
+    form, in the table's order (the first is the first in ``--help``)."""
+    def add(f):
+        return apply(f, [param_option(p) for p in table if p.cli])
+    return add
+
+
+#: The options several commands share, each declared once (``api.params``).
+SEED_OPTION = param_option(SEED_PARAM)
+BACKEND_OPTION = param_option(BACKEND, "geodesic_backend")
+LARGEST_COMPONENT_OPTION = param_option(LARGEST_COMPONENT)
+NO_CACHE_OPTION = param_option(CACHE, "no_cache")
 
 
 def apply(f, options):
@@ -172,8 +203,7 @@ SHAPE_OPTION_NAMES = ("points", "metric", "geodesic_backend", "seed", "largest_c
 
 def force_option(f):
     """``--force``: run work estimated beyond the time or memory limits (``shapecond.limits``)."""
-    return click.option("--force", is_flag=True,
-                        help="Run even when the estimated time or memory is beyond the limits.")(f)
+    return param_option(FORCE)(f)
 
 
 def epsilon_options(what: str):
