@@ -140,8 +140,12 @@ def test_cli_html_options(tmp_path, capsys):
     assert code == 2 and err.startswith("error: ") and "--html" in err
     code, out, err = run_cli(capsys, "match", SMALL, SMALL, "--landmarks-source", "0,50,300",
                              "--landmarks-target", "0,50,300", "-n", "20", "--matcher", "faq", "--no-cache",
-                             "-o", tmp_path / "map.txt", "--truth", "same-ids")
-    assert code == 2 and "--html" in err
+                             "-o", tmp_path / "map.txt", "--truth", "same-ids", "--json")
+    assert code == 0, err  # the truth measures the map without a page: the summary says how wrong it is
+    truth = json.loads(out)["truth"]
+    low, high = sorted((truth["median"], truth["mean"]))
+    assert truth["unit"] == "sqrt(area)" and 0 <= low <= high <= truth["worst"]
+    assert 0 < truth["n_points"] <= 200 and truth["mean_percent_half_diameter"] >= 0
 
 
 # --- in a real browser ----------------------------------------------------------------------------

@@ -35,7 +35,9 @@ from .common import Command, OutputFile, emit_json, info, json_option, table_opt
 @click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the map: colours carried source -> target, linked landmarks.")
 @click.option("--truth", default=None,
-              help="--html: the ground truth, to show the error field: a map file like -o's (line i: the true "
+              help="The ground truth, to measure the map's error (the summary's \"truth\": mean, median and worst "
+                   "geodesic error in sqrt(area) of TARGET, at up to 200 samples) and, with --html, to show the "
+                   "error field: a map file like -o's (line i: the true "
                    "TARGET id of SOURCE vertex i; -1, and only -1, for none), 'same-ids' (shapes with a common "
                    "vertex order), or SOURCE.vts,TARGET.vts, the two shapes' reference files of a remeshed "
                    "release (the error is then known at the source's reference vertices). Read and checked "
@@ -51,8 +53,6 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     """
     from ..api import match
 
-    if o["truth"] is not None and not o["html"]:
-        raise InputError("--truth is shown by --html; give --html FILE too")
     if (o["doubt_ply"] or o["doubt_png"] or o["suggest"]) and not o["error_bar"]:
         raise InputError("--doubt-ply, --doubt-png and --suggest read the error bar: drop --no-error-bar")
     t0 = time.perf_counter()
@@ -63,6 +63,8 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     out = Path(output)
     with atomic_open(out) as fh:
         np.savetxt(fh, result.map, fmt="%d")
+    if o["truth"] is not None:
+        result.truth_errors(o["truth"])  # in the summary; the page draws the same errors
     if o["doubt_ply"]:
         _write_doubt(result, o["doubt_ply"])
     if o["doubt_png"]:
@@ -80,6 +82,10 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
              f"{summary['n_landmarks']} landmarks, {summary['seconds']:.1f} s)")
         if "error_bar" in summary:
             info("error bar: " + summary["error_bar"]["text"])
+        if "truth" in summary:
+            t = summary["truth"]
+            info(f"error against the truth: mean {t['mean']:.3g} sqrt(area) ({t['mean_percent_half_diameter']:.3g} % "
+                 f"of half the diameter), median {t['median']:.3g}, worst {t['worst']:.3g}, at {t['n_points']} points")
         for i, s in enumerate(summary.get("suggestions", []), 1):
             info(f"next landmark {i}: source {s['source_id']} (provisional image {s['image_id']}), "
                  f"bar after it {s['bar_after']:.3g} sqrt(area)")
@@ -107,10 +113,10 @@ def _repeated_options(o: dict, truth_text) -> list:
 
 
 def _surfaces_up_front(source, target, o: dict) -> tuple:
-    """SOURCE and TARGET, loaded here when an output draws them: a distance matrix is refused and
-    ``--truth`` read and checked against both shapes (``o["truth"]`` becomes what it holds) before the
-    matching; otherwise the names, loaded by ``match``."""
-    drawn = [name for name in ("html", "doubt_ply", "doubt_png") if o[name]]
+    """SOURCE and TARGET, loaded here when an output draws them or ``--truth`` measures on them: a distance
+    matrix is refused and ``--truth`` read and checked against both shapes (``o["truth"]`` becomes what it
+    holds) before the matching; otherwise the names, loaded by ``match``."""
+    drawn = [name for name in ("html", "doubt_ply", "doubt_png", "truth") if o[name] is not None]
     if not drawn:
         return source, target
     from ..api import load
@@ -119,7 +125,7 @@ def _surfaces_up_front(source, target, o: dict) -> tuple:
     truth = read_truth(o["truth"])
     shapes = tuple(load(x, largest_component=o["largest_component"], force=o["force"]) for x in (source, target))
     if any(isinstance(x, np.ndarray) for x in shapes):
-        raise InputError(f"--{drawn[0].replace('_', '-')} draws the shapes, but a distance matrix has no surface")
+        raise InputError(f"--{drawn[0].replace('_', '-')} needs the shapes' surfaces, but a distance matrix has none")
     if truth is not None:
         truth_map(truth, *shapes)
     o["truth"] = truth
