@@ -327,3 +327,19 @@ def descendants(pid: int) -> set[int]:
         found.update(kids)
         todo += kids
     return found
+
+
+def open_offline(ctx, path: Path, ready: str = "window.shapecond && (window.shapecond.error || window.shapecond.ready)"):
+    """Open the page ``path`` in the browser context ``ctx`` with every network request refused, and wait
+    until the JavaScript condition ``ready`` holds; returns (page, console errors, network requests)."""
+    import re
+
+    page = ctx.new_page()
+    errors, requests = [], []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("request", lambda r: requests.append(r.url))
+    page.route(re.compile(r"^(https?|wss?|ftp)://"), lambda route: route.abort())
+    page.goto(Path(path).resolve().as_uri())
+    page.wait_for_function(ready, timeout=20_000)
+    return page, errors, requests

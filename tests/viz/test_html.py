@@ -20,7 +20,7 @@ from shapecond.viz import truth as viz_truth
 from shapecond.viz.render import view_rotation
 from shapecond.viz.scene import heatmap_scene, make_scene
 
-from tests.helpers import run_cli
+from tests.helpers import open_offline, run_cli
 
 SMALL = "demo:animal:resolution=0.08"  # 942 vertices: what is tested is the page, not the mesh
 
@@ -151,17 +151,9 @@ def test_cli_html_options(tmp_path, capsys):
 # --- in a real browser ----------------------------------------------------------------------------
 
 def _open(ctx, path: Path):
-    """Open a page offline; return (page, console errors, network requests)."""
-    page = ctx.new_page()
-    errors, requests = [], []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.on("request", lambda r: requests.append(r.url))
-    page.route(re.compile(r"^(https?|wss?|ftp)://"), lambda route: route.abort())
-    page.goto(path.resolve().as_uri())
-    page.wait_for_function("window.shapecond && (window.shapecond.error || (window.shapecond.ready && "
-                           "window.shapecond.viewers.every(v => v.firstFrame !== null)))", timeout=20_000)
-    return page, errors, requests
+    """Open a page offline once every viewer drew its first frame; return (page, console errors, requests)."""
+    return open_offline(ctx, path, "window.shapecond && (window.shapecond.error || (window.shapecond.ready && "
+                                   "window.shapecond.viewers.every(v => v.firstFrame !== null)))")
 
 
 def _check(page, errors, requests, path: Path, k: int = 0):

@@ -17,6 +17,8 @@ from shapecond.shapes.validate import make_geometry
 from shapecond.viz.mapview import VIEW_VERTICES, map_view, payload_json
 from shapecond.viz.scene import position_colours
 
+from tests.helpers import open_offline
+
 SMALL = "demo:animal:resolution=0.08"  # 942 vertices
 LARGER = "demo:animal:resolution=0.04"  # 4002 vertices: decimated to VIEW_VERTICES
 
@@ -141,14 +143,7 @@ def test_browser_report_views_turn_and_switch_colourings(browser, tmp_path, anim
     rows, views = _rows_and_views(animal, 30)
     path = tmp_path / "report.html"
     path.write_text(report_html(rows, views))
-    page = browser.new_page()
-    errors, requests = [], []
-    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-    page.on("pageerror", lambda e: errors.append(str(e)))
-    page.on("request", lambda r: requests.append(r.url))
-    page.route(re.compile(r"^(https?|wss?|ftp)://"), lambda route: route.abort())
-    page.goto(path.resolve().as_uri())
-    page.wait_for_function("window.shapecond && (window.shapecond.error || window.shapecond.ready)", timeout=20_000)
+    page, errors, requests = open_offline(browser, path)
     assert page.evaluate("window.shapecond.error") is None
     cells = page.locator(".sc-mapview")
     assert cells.count() == 30 + 25 and page.evaluate("window.shapecond.mapviews.views.length") == 55
