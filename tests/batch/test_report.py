@@ -1,7 +1,7 @@
 """``report.html`` of a matched batch, from rows alone (no matching)."""
 
 from shapecond.batch import schema
-from shapecond.batch.report import report_html
+from shapecond.batch.report import collection_landmark, report_html
 
 
 def _row(name, bar, **extra):
@@ -32,8 +32,10 @@ def test_the_template_vertex_most_often_suggested_is_one_landmark_for_the_collec
     rows[-1]["match_direction"] = "shape to template"
     page = report_html(rows)
     assert "template vertex 41 is the next landmark of 2 of the 3 maps listed" in page  # "fine": not listed,
+    assert collection_landmark(rows) == {"template_vertex": 41, "maps": 2, "listed": 3}
     rows[1]["suggest_source_id"] = 8                                                    # "back": a shape's id
     assert "One landmark for the collection" not in report_html(rows)  # no vertex shared by two maps
+    assert collection_landmark(rows) is None
 
 
 def _fake_view(size: int) -> dict:

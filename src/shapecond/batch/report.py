@@ -137,23 +137,34 @@ def _intro(rows, ok, more, failed) -> str:
             f"{len(failed)} failed.</p>")
 
 
-def _collection_advice(more) -> str:
-    """The template vertex suggested most often among the maps that say annotate more (template to shape:
-    their suggestions are template vertices), when two maps or more share it: one new label that gives
-    each of them a landmark pair, annotated once on the template and once on every shape."""
+def collection_landmark(rows) -> dict | None:
+    """The next landmark of the whole collection, or None: the template vertex suggested most often among the
+    maps whose bar says annotate more (template to shape: their suggestions are template vertices), when two
+    maps or more share it.  A new label there, annotated on the template and on every shape, gives each of
+    those maps one more landmark pair.  Returns ``{"template_vertex", "maps", "listed"}``: the vertex, how
+    many listed maps suggest it, and how many listed maps suggest a template vertex."""
     from collections import Counter
 
-    ids = Counter(int(r["suggest_source_id"]) for r in more
-                  if r.get("match_direction") == "template to shape" and r.get("suggest_source_id") is not None)
-    if not ids:
-        return ""
+    from ..api.collection import ANNOTATE_MORE
+
+    ids = Counter(int(r["suggest_source_id"]) for r in rows
+                  if r["error"] is None and r["bar"] is not None and r["bar"] > ANNOTATE_MORE
+                  and r.get("match_direction") == "template to shape" and r.get("suggest_source_id") is not None)
+    if not ids or ids.most_common(1)[0][1] < 2:
+        return None
     vertex, count = ids.most_common(1)[0]
-    if count < 2:
+    return {"template_vertex": vertex, "maps": count, "listed": sum(ids.values())}
+
+
+def _collection_advice(rows) -> str:
+    """``collection_landmark`` in words."""
+    found = collection_landmark(rows)
+    if found is None:
         return ""
-    return (f"<p><b>One landmark for the collection:</b> template vertex {vertex} is the next landmark of {count} "
-            f"of the {sum(ids.values())} maps listed (template to shape). A new label there, annotated on the "
-            "template and on every shape (its provisional image on each is in the table), gives each map one "
-            "more landmark pair.</p>")
+    return (f"<p><b>One landmark for the collection:</b> template vertex {found['template_vertex']} is the next "
+            f"landmark of {found['maps']} of the {found['listed']} maps listed (template to shape). A new label "
+            "there, annotated on the template and on every shape (its provisional image on each is in the table), "
+            "gives each map one more landmark pair.</p>")
 
 
 def report_html(rows: list[dict], views: dict | None = None) -> str:
@@ -186,7 +197,7 @@ def report_html(rows: list[dict], views: dict | None = None) -> str:
                    "of maps.</p>")
     out += [_views_note(kept, left_out), _histogram([r["bar"] for r in ok], ANNOTATE_MORE), "<h2>Annotate more</h2>"]
     shown = ["view"] if kept else []
-    out.append(_collection_advice(more))
+    out.append(_collection_advice(rows))
     out.append(_table(["map", *shown, "bar", "cycle", "pairs", "next landmark: source vertex",
                        "its provisional image", "bar after"],
                       [[_label(r), *view(r), _num(r["bar"]), _num(r.get("cycle_error")), r["landmark_pairs"],

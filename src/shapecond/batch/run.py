@@ -24,7 +24,7 @@ from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
 from .matches import MatchPlan, plan_matching
-from .report import write_report
+from .report import collection_landmark, write_report
 from .rows import COLLECTION, params_key, shape_row, with_defaults
 from .table import Table, table_format
 
@@ -49,6 +49,7 @@ class BatchSummary:
     epsilon: float | None = None                         # the level of δ (None: each shape's sample spacing)
     epsilon_source: str = "the median sample spacing of each shape (default)"
     annotate_more: list = field(default_factory=list)    # match: dicts file, bar, suggested landmark
+    collection_landmark: dict | None = None              # match: report.collection_landmark
     report: str | None = None                            # match: the report page
 
     @property
@@ -60,7 +61,8 @@ class BatchSummary:
                 "failed": self.failed, "seconds": self.seconds, "median_seconds": self.median_seconds,
                 "shapes_per_minute": self.shapes_per_minute, "where": self.where,
                 "most_symmetric": self.most_symmetric, "failures": self.failures, "epsilon": self.epsilon,
-                "epsilon_source": self.epsilon_source, "annotate_more": self.annotate_more, "report": self.report}
+                "epsilon_source": self.epsilon_source, "annotate_more": self.annotate_more, "report": self.report,
+                "collection_landmark": self.collection_landmark}
 
 
 def _failed_row(spec, digest, params, error) -> dict:
@@ -153,8 +155,8 @@ def run_batch(inputs, out, options=None, what=("score",), how: BatchRun = BatchR
     new = sum(k not in have for ks in keys for k in ks)
     summary = _summary(str(out), batch_rows, new, len(batch_rows) - new, time.perf_counter() - t0, where)
     if plan.active:
-        summary = replace(summary, annotate_more=_annotate_more(batch_rows),
-                          report=_short(str(write_report(out, batch_rows))))
+        summary = replace(summary, annotate_more=_annotate_more(batch_rows), collection_landmark=collection_landmark(
+            batch_rows), report=_short(str(write_report(out, batch_rows))))
     return replace(summary, epsilon=options["epsilon"], epsilon_source=source or summary.epsilon_source)
 
 
@@ -253,6 +255,10 @@ def format_summary(s: BatchSummary) -> str:
                                                        else f" ({r['direction']}, from {r['source']})")
                   + f": next source vertex {r['source_id']} (image {r['image_id']}), bar after {num(r['bar_after'])}"
                   for r in s.annotate_more[:SUMMARY_TOP]]
+    if s.collection_landmark:
+        c = s.collection_landmark
+        lines.append(f"collection  template vertex {c['template_vertex']} is the next landmark of {c['maps']} of the "
+                     f"{c['listed']} maps listed: one new label there, on the template and every shape")
     if s.failures:
         lines.append(f"failed ({s.failed}; the first {len(s.failures)}):" if s.failed > len(s.failures)
                      else "failed:")
