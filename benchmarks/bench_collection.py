@@ -107,12 +107,13 @@ def _children_cpu() -> float:
     return ru.ru_utime + ru.ru_stime
 
 
-def run_command(classes, folder: Path, a) -> tuple[list, dict, dict]:
+def run_command(classes, folder: Path, a, again: bool = False) -> tuple[list, dict, dict]:
     """The user's one command; (its rows, its JSON summary, its cost, kept in ``out/cost.json``).  With
     ``--reuse`` the command is run again with ``--resume`` (nothing to compute: its summary) and the cost is
-    the first run's."""
+    the first run's; ``again``: run again with ``--resume`` after the landmark files changed (the rows whose
+    landmarks changed are computed anew), its own cost."""
     out = folder.parent / "out" / "table.jsonl"
-    out.parent.mkdir(exist_ok=a.reuse is not None)
+    out.parent.mkdir(exist_ok=a.reuse is not None or again)
     cmd = [sys.executable, "-m", "shapecond", "batch", str(folder), "--out", str(out), "--json",
            "--points", str(a.points)]
     if len(classes) == 1:
@@ -122,7 +123,7 @@ def run_command(classes, folder: Path, a) -> tuple[list, dict, dict]:
         pairs.write_text("".join(f"{c.null.stem} {s.stem}\n" for c in classes for s in c.targets))
         cmd += ["--pairs", str(pairs)]
     cmd += (["--matcher", a.matcher] if a.matcher else []) + (["--both-directions"] if a.both_directions else [])
-    cmd += ["--resume"] if a.reuse is not None else []
+    cmd += ["--resume"] if a.reuse is not None or again else []
     shown = " ".join(["shapecond", *cmd[3:]]).replace(str(folder), "COLLECTION").replace(str(out.parent), "OUT")
     print(shown, flush=True)
     load0, t0, c0 = os.getloadavg()[0], time.perf_counter(), _children_cpu()
@@ -131,7 +132,9 @@ def run_command(classes, folder: Path, a) -> tuple[list, dict, dict]:
                 command=shown, status=proc.returncode)
     if proc.returncode not in (0, 3):
         raise SystemExit(f"the command failed ({proc.returncode}): {proc.stderr.strip()[-2000:]}")
-    if a.reuse is None:
+    if again:
+        pass
+    elif a.reuse is None:
         (out.parent / "cost.json").write_text(json.dumps(cost))
     else:
         cost = json.loads((out.parent / "cost.json").read_text())
