@@ -87,23 +87,6 @@ def test_zoomout_beats_the_distance_extension_which_beats_nearest_sample(pair, m
     assert errs["zoomout"] < errs["distances"] < errs["nearest"], errs
 
 
-def test_distance_extension_in_small_cost_blocks_is_the_same_map(pair, monkeypatch):
-    """The ``"distances"`` extension computes each cell's costs in blocks of source vertices (bounded
-    memory): blocks of 1, of a few rows and one block per cell give the same image to every vertex."""
-    from shapecond.matching import dense
-    from shapecond.matching.seeded import FAQOptions, faq_match
-
-    src, _, tgt, _, ls, lt = pair
-    s, ils = insert_landmarks(sample_surface(src, 60, cache=False), ls)
-    t, ilt = insert_landmarks(sample_surface(tgt, 60, cache=False), lt)
-    sm = faq_match(s.D, t.D, ils, ilt, FAQOptions())
-    maps = {}
-    for entries in (1, 1000, 1 << 40):
-        monkeypatch.setattr(dense, "COST_ENTRIES", entries)
-        maps[entries] = dense.dense_map(s, t, sm.t)
-    assert np.array_equal(maps[1], maps[1 << 40]) and np.array_equal(maps[1000], maps[1 << 40])
-
-
 def test_the_distance_extension_is_the_cost_formula_argmin(pair):
     """Each source vertex goes to the target vertex of its cell's candidates with the least
     ``(|a|² + |b|²) − 2 a·b`` over the anchors' distances, computed in that order, first on ties."""
