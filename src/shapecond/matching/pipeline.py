@@ -168,12 +168,21 @@ def dense_stage(source_geometry, target_geometry, initial, anchors: Anchors | No
     return zoomout(bs, bt, (source_geometry.vertices, target_geometry.vertices), initial, anchors, options.zoomout)
 
 
-def sample_sides(source: SampledSurface, landmarks_source, target: SampledSurface, landmarks_target):
-    """(source, target) sides of the landmark pairs at the samples (``orientation``; landmarks given as
-    sample indices), or None for point clouds and fewer than 2 landmarks."""
+def landmark_sides(source: SampledSurface, landmarks_source, target: SampledSurface, landmarks_target):
+    """(source, target) sides of the landmark pairs at every vertex (``orientation``; landmarks given as
+    sample indices), or None for point clouds and fewer than 2 landmarks: what the sample matcher reads
+    at the samples (``sample_sides``) and the dense stage's anchors at every vertex (``Anchors.oriented``,
+    ``problem.MatchProblem``: computed once for both)."""
     fs = orientation_features(source.geometry, source.rows[np.asarray(landmarks_source)])
     ft = orientation_features(target.geometry, target.rows[np.asarray(landmarks_target)])
-    return None if fs is None or ft is None else (fs[source.samples], ft[target.samples])
+    return None if fs is None or ft is None else (fs, ft)
+
+
+def sample_sides(source: SampledSurface, landmarks_source, target: SampledSurface, landmarks_target, sides=None):
+    """(source, target) sides of the landmark pairs at the samples: ``landmark_sides``, given or computed
+    here, read at the samples; None for point clouds and fewer than 2 landmarks."""
+    sides = sides if sides is not None else landmark_sides(source, landmarks_source, target, landmarks_target)
+    return None if sides is None else (sides[0][source.samples], sides[1][target.samples])
 
 
 def match_landmarks_only(source_geometry, target_geometry, landmarks_source, landmarks_target,

@@ -192,7 +192,10 @@ class Anchors:
 
     def oriented(self, source_geometry, target_geometry) -> "Anchors":
         """The same anchors with the sides of every landmark pair on both meshes
-        (``orientation.orientation_features``; unchanged for point clouds)."""
+        (``orientation.orientation_features``; unchanged for point clouds, and where the sides are
+        known already: ``problem.MatchProblem`` gives those the sample matcher read)."""
+        if self.source_sides is not None and self.target_sides is not None:
+            return self
         fs = orientation_features(source_geometry, self.source_rows)
         ft = orientation_features(target_geometry, self.target_rows)
         if fs is None or ft is None:
