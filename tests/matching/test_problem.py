@@ -123,6 +123,23 @@ def test_the_truth_summary_is_the_geodesic_error_in_both_units(pair):
     assert exact["mean"] == exact["worst"] == 0.0 and exact["within_0.05"] == 1.0
 
 
+def test_the_sides_of_the_landmark_pairs_are_computed_once_for_both_stages(pair, monkeypatch):
+    """The sample matcher reads the landmark pairs' sides at the samples, the dense stage's anchors at
+    every vertex: one ``orientation_features`` call per shape, and the anchors hold those sides."""
+    from shapecond.matching import zoomout
+
+    computed, anchored = [], []
+    real = pipeline.orientation_features
+    monkeypatch.setattr(pipeline, "orientation_features", lambda g, rows: computed.append(g) or real(g, rows))
+    monkeypatch.setattr(zoomout, "orientation_features", None)  # the anchors must not compute them again
+    real_zoomout = pipeline.zoomout
+    monkeypatch.setattr(pipeline, "zoomout", lambda *a: anchored.append(a[4]) or real_zoomout(*a))
+    p = MatchProblem(*pair, LM, LM, MatchOptions(n_points=40, cache=False))
+    assert p.vertex_map.shape == (pair[0].n_vertices,)
+    assert computed == [pair[0], pair[1]]
+    assert anchored[0].source_sides is p._sides[0] and anchored[0].target_sides is p._sides[1]
+
+
 def test_the_match_page_draws_the_errors_its_problem_computed(pair, tmp_path, monkeypatch):
     r = sc.match(*pair, LM, LM, n_points=40, dense="nearest", cache=False)
     assert isinstance(r.problem, MatchProblem) and r.advice == r.problem.suggest
