@@ -6,8 +6,9 @@ Usage:
 
 ``sc.match`` of SOURCE → TARGET with 6 landmarks, the error bar on, **cold** (an empty
 ``SHAPECOND_CACHE`` for every run) and on **one core** (one BLAS and one numba thread), in a
-fresh interpreter for the working tree and for the package at ``--baseline`` (default: the
-merge base with ``main``), one after the other in the same run.  Each stage's CPU is
+fresh interpreter for this checkout's ``src`` (first on ``PYTHONPATH``, whatever package the
+interpreter has installed) and for the package at ``--baseline`` (default: the merge base with
+``main``), one after the other in the same run.  Each stage's CPU is
 exclusive (a stage called inside another is not counted twice):
 
 * geodesics and samples: ``matching.sampled.sample_surface`` (the heat method's factors, the
@@ -184,7 +185,9 @@ def main(argv=None) -> None:
     pair = tuple(a.pair) if a.pair else DEMO
     ls = a.landmarks_source or spread_ids(pair[0])
     lt = a.landmarks_target or ls
-    trees: dict[str, Path | None] = {"this tree": None}
+    # this checkout's package, not whichever one the interpreter has installed (an editable install of
+    # another worktree ran as "this tree" before)
+    trees: dict[str, Path | None] = {"this tree": Path(__file__).resolve().parents[1] / "src"}
     if not a.no_baseline:
         sha, src = baseline_src(a.baseline or git("merge-base", "HEAD", "main"))
         trees = {f"baseline {sha[:8]}": src, **trees}
