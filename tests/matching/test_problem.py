@@ -123,6 +123,15 @@ def test_the_truth_summary_is_the_geodesic_error_in_both_units(pair):
     assert exact["mean"] == exact["worst"] == 0.0 and exact["within_0.05"] == 1.0
 
 
+def test_a_point_cloud_truth_summary_is_in_diameters(pair):
+    from shapecond.shapes.validate import make_geometry
+
+    clouds = [make_geometry(g.vertices, None, g.name) for g in pair]
+    p = MatchProblem(*clouds, LM, LM, MatchOptions(matcher="faq", n_points=40, dense="nearest", cache=False))
+    s = p.truth_summary(np.arange(clouds[0].n_vertices))
+    assert s["unit"] == "diameter" and 0 <= s["mean"] <= s["worst"] < 1
+
+
 def test_the_sides_of_the_landmark_pairs_are_computed_once_for_both_stages(pair, monkeypatch):
     """The sample matcher reads the landmark pairs' sides at the samples, the dense stage's anchors at
     every vertex: one ``orientation_features`` call per shape, and the anchors hold those sides."""

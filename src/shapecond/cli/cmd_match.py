@@ -84,7 +84,7 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
             info("error bar: " + summary["error_bar"]["text"])
         if "truth" in summary:
             t = summary["truth"]
-            info(f"error against the truth: mean {t['mean']:.3g} sqrt(area) ({t['mean_percent_half_diameter']:.3g} % "
+            info(f"error against the truth: mean {t['mean']:.3g} {t['unit']} ({t['mean_percent_half_diameter']:.3g} % "
                  f"of half the diameter), median {t['median']:.3g}, worst {t['worst']:.3g}, at {t['n_points']} points")
         for i, s in enumerate(summary.get("suggestions", []), 1):
             info(f"next landmark {i}: source {s['source_id']} (provisional image {s['image_id']}), "

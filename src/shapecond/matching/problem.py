@@ -318,12 +318,14 @@ class MatchProblem:
     def truth_summary(self, truth, n_points: int = TRUTH_SAMPLES) -> dict:
         """The map's errors against a ground truth in the field's two units (``truth_errors``): mean,
         median and worst in sqrt(area) of the target and in % of half its diameter, the share of the
-        measured points within 0.05 sqrt(area), and the number of points measured."""
+        measured points within 0.05 sqrt(area), and the number of points measured.  A point cloud has no
+        area: its errors are then in units of its diameter (``unit`` says which)."""
         raw, samples, diameter = self._truth(truth, n_points)
         area = normalise(raw, diameter, surface_unit(self.target_geometry, diameter) ** 2, "sqrt_area")
         half = normalise(raw, diameter)
         return {"mean": float(area.mean()), "median": float(np.median(area)), "worst": float(area.max()),
-                "within_0.05": float(np.mean(area <= 0.05)), "unit": "sqrt(area)",
+                "within_0.05": float(np.mean(area <= 0.05)),
+                "unit": "sqrt(area)" if self.target_geometry.faces is not None else "diameter",
                 "mean_percent_half_diameter": float(half.mean()), "n_points": int(samples.size)}
 
     def _truth(self, truth, n_points):
