@@ -79,7 +79,7 @@ def dense_map(source: SampledSurface, target: SampledSurface, t, method: str = "
         if W.size == 0:
             out[V] = target.samples[t[s]]
             continue
-        _cell_images(source.rows, target.rows, A, t[A], V, W, float(source.unit), float(target.unit), out)
+        _cell_images(source.rows, target.rows, A, t[A], V, W, (float(source.unit), float(target.unit)), out)
     return out
 
 
@@ -93,17 +93,18 @@ def _squares(x, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True, fastmath={"contract"})
-def _cell_images(Rs, Rt, A, TA, V, W, source_unit, target_unit, out):  # pragma: no cover - compiled
+def _cell_images(Rs, Rt, A, TA, V, W, units, out):  # pragma: no cover - compiled
     """``out[v] = W[argmin_w (|a|² + |b_w|²) − 2 a·b_w]`` for every source vertex v of ``V`` (module
     docstring): ``a`` its distances to the anchor samples ``A`` (rows of ``Rs``), ``b_w`` those of
-    candidate w to their images ``TA`` (rows of ``Rt``), both divided by their shape's unit; the
-    first least cost on ties.
+    candidate w to their images ``TA`` (rows of ``Rt``), divided by their shape's unit (``units``: the
+    source's, the target's); the first least cost on ties.
 
     The cost is that of a product of matrices before: ``|a|²`` and ``|b|²`` summed anchor by anchor
     (``_squares``), ``2 a·b`` accumulated anchor by anchor in fused multiply-adds as OpenBLAS's dgemm
     kernels do (the contract flag; none where the processor has none): the same map on TOSCA david0 →
     david1 (52,565 vertices, every image equal), in 0.25 instead of 1.2 s CPU, with no cost matrix
     and its memory passes."""
+    source_unit, target_unit = units
     k = A.size
     b = np.empty((k, W.size))
     for r in range(k):
