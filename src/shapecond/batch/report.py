@@ -137,6 +137,15 @@ def _intro(rows, ok, more, failed) -> str:
             f"{len(failed)} failed.</p>")
 
 
+def annotate_more(rows) -> list[dict]:
+    """The matched rows whose bar says "annotate more" (``api.collection.ANNOTATE_MORE``), the largest bar
+    first (ties: by file)."""
+    from ..api.collection import ANNOTATE_MORE
+
+    return sorted((r for r in rows if r["error"] is None and r["bar"] is not None and r["bar"] > ANNOTATE_MORE),
+                  key=lambda r: (-r["bar"], r["file"]))
+
+
 def collection_landmark(rows) -> dict | None:
     """The next landmark of the whole collection, or None: the template vertex suggested most often among the
     maps whose bar says annotate more (template to shape: their suggestions are template vertices), when two
@@ -145,11 +154,8 @@ def collection_landmark(rows) -> dict | None:
     many listed maps suggest it, and how many listed maps suggest a template vertex."""
     from collections import Counter
 
-    from ..api.collection import ANNOTATE_MORE
-
-    ids = Counter(int(r["suggest_source_id"]) for r in rows
-                  if r["error"] is None and r["bar"] is not None and r["bar"] > ANNOTATE_MORE
-                  and r.get("match_direction") == "template to shape" and r.get("suggest_source_id") is not None)
+    ids = Counter(int(r["suggest_source_id"]) for r in annotate_more(rows)
+                  if r.get("match_direction") == "template to shape" and r.get("suggest_source_id") is not None)
     if not ids or ids.most_common(1)[0][1] < 2:
         return None
     vertex, count = ids.most_common(1)[0]
@@ -175,7 +181,7 @@ def report_html(rows: list[dict], views: dict | None = None) -> str:
     ok = sorted((r for r in rows if r["error"] is None and r["bar"] is not None),
                 key=lambda r: (r["bar"], r["file"], _label(r)))
     failed = [r for r in rows if r["error"] is not None]
-    more = sorted((r for r in ok if r["bar"] > ANNOTATE_MORE), key=lambda r: -r["bar"])  # the most urgent first
+    more = annotate_more(ok)  # the most urgent first
     kept, left_out = _kept_views(ok, more, views or {})
     index = {id(r): k for k, r in enumerate(ok)}
 

@@ -24,7 +24,7 @@ from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
 from .matches import MatchPlan, plan_matching
-from .report import collection_landmark, write_report
+from .report import annotate_more, collection_landmark, write_report
 from .rows import COLLECTION, params_key, shape_row, with_defaults
 from .table import Table, table_format
 
@@ -161,11 +161,8 @@ def run_batch(inputs, out, options=None, what=("score",), how: BatchRun = BatchR
 
 
 def _annotate_more(rows) -> list[dict]:
-    """The matched shapes whose bar says "annotate more" (``api.collection.ANNOTATE_MORE``), worst first."""
-    from ..api.collection import ANNOTATE_MORE
-
-    bad = sorted((r for r in rows if r["error"] is None and r["bar"] is not None and r["bar"] > ANNOTATE_MORE),
-                 key=lambda r: (-r["bar"], r["file"]))
+    """The matched shapes whose bar says "annotate more" (``report.annotate_more``), worst first."""
+    bad = annotate_more(rows)
     return [{"file": _short(r["file"]), "bar": r["bar"], "source_id": r["suggest_source_id"],
              "image_id": r["suggest_image_id"], "bar_after": r["suggest_bar_after"],
              "direction": r["match_direction"], "source": _short(r["match_source"] or r["file"]),
