@@ -203,9 +203,10 @@ G = "demo:sphere:subdivisions=1"
 @pytest.mark.parametrize("call,needle", [
     (lambda: sc.match(G, G, [0], [0], n_points=8, cache=False, refin=False), "unknown option 'refin'"),
     (lambda: sc.match(G, G, [0], [0], matcher="faq", n_points=8, cache=False, k=3), "unknown option 'k'"),
-    (lambda: sc.landmarks(G, 2, "cnbs", 8, cache=False, methd="fps"), "no option 'methd'"),
-    (lambda: sc.landmarks(G, 2, "fps", 8, cache=False, resolve_fraction=0.2), "no option 'resolve_fraction'"),
-    (lambda: sc.landmarks(G, 2, "hks", 8, cache=False, alpha=1.0), "no option 'alpha'"),
+    (lambda: sc.landmarks(G, 2, "cnbs", 8, cache=False, methd="fps"),
+     "unknown option 'methd' for method 'cnbs' (did you mean 'method'?)"),
+    (lambda: sc.landmarks(G, 2, "fps", 8, cache=False, resolve_fraction=0.2), "unknown option 'resolve_fraction' for method 'fps'"),
+    (lambda: sc.landmarks(G, 2, "hks", 8, cache=False, alpha=1.0), "unknown option 'alpha' for method 'hks'"),
     (lambda: sc.heatmap(G, n_points=8, cache=False, resolve_fractio=0.2), "argument 'resolve_fractio'"),
     (lambda: sc.score(G, 8, exact="yes", cache=False), "exact must be 'auto', True or False"),
     (lambda: sc.deformation_level(G, G, n_points=8, error_bar=False), "unknown option 'error_bar'"),

@@ -34,7 +34,7 @@ import importlib
 
 #: Where each public name lives; a module is imported when one of its names is first used, so
 #: ``import shapecond`` (and ``shapecond info``) does not load the searches' compiled kernels.
-_HOME = {"DEFAULT_POINTS": "inputs", "info": "inputs", "load": "inputs", "metric_shape": "inputs",
+_HOME = {"DEFAULT_POINTS": "params", "info": "inputs", "load": "inputs", "metric_shape": "inputs",
          "require_mesh": "inputs", "match": "matching", "ShapeOptions": "options", "SymmetryProblem": "problem",
          "HeatMapResult": "results", "KappaResult": "results", "LandmarkResult": "results", "LocalResult": "results",
          "MatchResult": "results", "ScoreResult": "results", "heatmap": "scores", "kappa": "scores",
