@@ -10,7 +10,8 @@ every door.
   ``metric_shape`` (N farthest-point samples and their distances, diameter 1);
 * ``scores``: ``score`` (σ bracket, Eq. 5; κ bracket, Theorem 4.1; δ(ε);
   verdict), ``local_score`` (Section 5), ``landmarks`` (CNBS and baselines,
-  Section 6), ``heatmap`` (Figures 1 and 4), ``kappa`` (probes of Eq. 4);
+  Section 6), ``heatmap`` (Figures 1 and 4), ``kappa`` (probes of Eq. 4); the
+  tables ``SCORE_PARAMS`` and ``LANDMARK_PARAMS`` of ``score``'s and ``landmarks``'s options;
 * ``problem``: ``SymmetryProblem``, one shape whose searches are kept for
   repeated queries;
 * ``settings``: ``score_settings``, the checked settings of both kinds of score;
