@@ -213,6 +213,8 @@ SYMMETRY_MAP = Param("symmetry_map", File(), None, "A .sym file (line i = 1-base
 PROGRESS = Param("progress", Flag(), False, "Progress bars on stderr (the command line: when it is a terminal).")
 #: How an input becomes a metric shape: the fields of ``options.ShapeOptions``, in the commands' order.
 SHAPE_PARAMS = (METRIC, BACKEND, SEED, LARGEST_COMPONENT, CACHE, TARGET, TARGET_FACTOR, SYMMETRY_MAP, FORCE, PROGRESS)
+#: The shape options of the command line, in its order: ``--points`` and the rows of ``SHAPE_PARAMS`` it has.
+SHAPE_OPTIONS = (POINTS, *[p for p in SHAPE_PARAMS if p.cli])
 EFFORT = Param("effort", Choice(EFFORTS), "default", "Work spent by the witness searches.", cli=("--effort",))
 EPSILON = Param("epsilon", FloatRange(0, none=True), None, "Distortion level ε of δ(ε), RMS, in diameters.",
                 cli=("--epsilon",), cli_default="the median sample spacing")
@@ -297,5 +299,5 @@ def from_cli_keys(table, values: dict) -> dict:
 
 __all__ = ["BACKENDS", "CACHE", "Choice", "DEFAULT_POINTS", "EFFORT", "EFFORTS", "EPSILON", "FORCE", "File",
            "FloatRange", "Flag", "FlagOr", "IDS_HELP", "Ids", "IntRange", "LARGEST_COMPONENT", "MAX_POINTS", "METRIC",
-           "POINTS", "PROGRESS", "Param", "REQUIRED", "SEED", "SHAPE_PARAMS", "SYMMETRY_MAP", "TARGET",
-           "TARGET_FACTOR", "check_keywords", "cli_defaults", "cli_key", "from_cli_keys", "grouped"]
+           "POINTS", "PROGRESS", "Param", "REQUIRED", "SEED", "SHAPE_OPTIONS", "SHAPE_PARAMS", "SYMMETRY_MAP",
+           "TARGET", "TARGET_FACTOR", "check_keywords", "cli_defaults", "cli_key", "from_cli_keys", "grouped"]

@@ -25,30 +25,29 @@ from ..symmetry.report import score_report
 from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
 from .options import LANDMARK_SCORE, ShapeOptions, landmark_options, refuse_unknown
-from .params import (EFFORT, EPSILON, IDS_HELP, MAX_POINTS, POINTS, PROGRESS, REQUIRED, SHAPE_PARAMS, Choice, Flag,
-                     Ids, IntRange, Param, check_keywords)
+from .params import (EFFORT, EPSILON, IDS_HELP, MAX_POINTS, PROGRESS, REQUIRED, SHAPE_OPTIONS, Choice, Flag, Ids,
+                     IntRange, Param, check_keywords)
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 from .settings import EXACT, TIME_LIMIT, UPPER, score_settings
 
 #: Largest N of κ probes beyond the landmarks (exact matching enumerates every map).
 DEFAULT_KAPPA_POINTS = 8
 
-_SHAPE = (POINTS, *[p for p in SHAPE_PARAMS if p is not PROGRESS])
 #: The options of ``score``, each declared once (``params``): ``shapecond score``'s options and ``score``'s
 #: keywords are made from it (``progress``: Python only; the command line shows bars on a terminal).
-SCORE_PARAMS = (*_SHAPE,
+SCORE_PARAMS = (*SHAPE_OPTIONS,
                 Param("landmarks", Ids(), (), "Input vertex ids (row indices for a matrix) fixed by every map: "
                       + IDS_HELP + ".", cli=("--landmarks",)),
                 EXACT, UPPER, TIME_LIMIT, EFFORT, EPSILON, PROGRESS)
 METHOD = Param("method", Choice(METHODS), "cnbs",
-               "cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the scale-aware score δ(ε); "
-               "fps; pls (Tevs et al., reimplemented); hks (heat kernel signature extrema); user (--user-landmarks); "
-               "cnbs-local.", cli=("--method",))
+               "cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the scale-aware score "
+               "δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel signature extrema); user "
+               "(--user-landmarks); cnbs-local.", cli=("--method",))
 #: The options of ``landmarks`` that every method takes, each declared once (``params``): ``shapecond
 #: landmarks``'s options and ``landmarks``'s keywords are made from it.  A method's own options
 #: (``selection.method_options``: CNBS's ``resolve_fraction``, HKS's ``n_eigs``, ...) are Python only and
 #: checked by the method's options class.
-LANDMARK_PARAMS = (*_SHAPE,
+LANDMARK_PARAMS = (*SHAPE_OPTIONS,
                    Param("k", IntRange(0, MAX_POINTS), REQUIRED, "Number of landmarks (method user: 0 = all given).",
                          cli=("-k",)),
                    METHOD,

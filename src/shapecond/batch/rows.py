@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._version import __version__
-from ..api.params import EFFORT, EPSILON, POINTS, SHAPE_PARAMS, cli_defaults, from_cli_keys
+from ..api.params import EFFORT, EPSILON, SHAPE_OPTIONS, SHAPE_PARAMS, cli_defaults, from_cli_keys
 from ..checks import check_float
 from ..errors import InputError, ShapecondError
 from ..parallel import PeakMemory, worker_name
@@ -30,9 +30,8 @@ from .inputs import content_hash
 #: They are held, and stored in the ``params`` column, under the command line's names (``params.cli_key``:
 #: ``points``, ``geodesic_backend``, ``no_cache``), which the tables written so far hold; ``shape_keywords``
 #: gives the Python keywords.
-SCORE_ROWS = (POINTS, *SHAPE_PARAMS, EFFORT, EPSILON)
-DEFAULT_OPTIONS = {**cli_defaults(SCORE_ROWS), "what": ["score"], "matcher": None, "landmark_table": None,
-                   "pairs": None, "both_directions": False}
+DEFAULT_OPTIONS = {**cli_defaults((*SHAPE_OPTIONS, EFFORT, EPSILON)), "what": ["score"], "matcher": None,
+                   "landmark_table": None, "pairs": None, "both_directions": False}
 #: ``epsilon`` read off the collection itself (``api.level.collection_level``) rather than given.
 COLLECTION = "collection"
 #: Options of matching (``--what match:TEMPLATE``): left out of the parameters of a batch without it.

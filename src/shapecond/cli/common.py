@@ -21,13 +21,12 @@ import sys
 
 import click
 
-from ..api.params import (BACKEND, CACHE, DEFAULT_POINTS, EPSILON, FORCE, POINTS, REQUIRED,
-                          SHAPE_PARAMS, Choice, File, Flag, FlagOr, Ids, IntRange, Param, cli_key, from_cli_keys)
+from ..api.params import (BACKEND, CACHE, DEFAULT_POINTS, EPSILON, FORCE, POINTS, REQUIRED, SHAPE_OPTIONS, SHAPE_PARAMS,
+                          Choice, File, Flag, FlagOr, Ids, IntRange, Param, cli_key, from_cli_keys)
 from ..api.params import SEED as SEED_PARAM
 from ..checks import check_float, check_int, check_seed
 from ..errors import InputError
 from ..jsonable import dumps
-
 
 
 def _option_name(param) -> str:
@@ -188,15 +187,14 @@ def apply(f, options):
     return f
 
 
-#: The shape options of the commands not made from a table (sample, kappa, heatmap, batch), under their
-#: command-line names (``params.cli_key``: ``points``, ``geodesic_backend``, ``no_cache``, ...).
-_SHAPE_ROWS = (POINTS, *[p for p in SHAPE_PARAMS if p.cli])
-SHAPE_OPTION_NAMES = tuple(cli_key(p) for p in _SHAPE_ROWS)
+#: The names under which the commands not made from a table (sample, kappa, heatmap, batch) read the shape
+#: options (``params.cli_key``: ``points``, ``geodesic_backend``, ``no_cache``, ...).
+SHAPE_OPTION_NAMES = tuple(cli_key(p) for p in SHAPE_OPTIONS)
 
 
 def shape_options(f):
-    """Options that build the metric shape: --points, --metric, --geodesic-backend, ... (``params.SHAPE_PARAMS``)."""
-    return apply(f, [param_option(p, cli_key(p)) for p in _SHAPE_ROWS])
+    """Options that build the metric shape: --points, --metric, --geodesic-backend, ... (``params.SHAPE_OPTIONS``)."""
+    return apply(f, [param_option(p, cli_key(p)) for p in SHAPE_OPTIONS])
 
 
 def force_option(f):
