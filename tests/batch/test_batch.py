@@ -14,7 +14,7 @@ import pytest
 
 from shapecond.batch import schema
 from shapecond.batch.inputs import content_hash, expand_inputs
-from shapecond.batch.rows import params_key, parse_what, shape_row
+from shapecond.batch.rows import DEFAULT_OPTIONS, params_key, parse_what, shape_keywords, shape_row, with_defaults
 from shapecond.batch.run import BatchRun, run_batch
 from shapecond.batch.table import Table
 from shapecond.errors import InputError
@@ -60,6 +60,40 @@ def test_what_is_parsed_and_checked():
             parse_what([bad])
     # the key does not depend on how --what was spelled
     assert params_key({"what": ["local", "score"]}) == params_key({"what": ["score,local"]})
+
+
+def test_the_stored_options_keep_their_names_and_defaults():
+    """A batch's defaults come from the commands' parameter rows (``api.params``) but keep the names and values
+    the tables written so far hold in their ``params`` column (written by shapecond 0.x before the rows): a table
+    of those still resumes, and a default cannot drift from the commands' without this test failing."""
+    assert params_key({"what": ["score"]}) == (
+        '{"effort":"default","geodesic_backend":"heat","largest_component":false,"metric":"geodesic","points":null,'
+        '"seed":0,"symmetry_map":null,"target":null,"target_factor":8,"what":["score"]}')
+    given = {"what": ["score", "landmarks:5:fps"], "points": 50, "no_cache": True, "geodesic_backend": "fmm",
+             "epsilon": 0.1}
+    assert params_key(given) == (
+        '{"effort":"default","epsilon":0.1,"geodesic_backend":"fmm","largest_component":false,"metric":"geodesic",'
+        '"points":50,"seed":0,"symmetry_map":null,"target":null,"target_factor":8,"what":["score","landmarks:5:fps"]}')
+    assert shape_keywords(with_defaults(given)) == {
+        "metric": "geodesic", "backend": "fmm", "seed": 0, "largest_component": False, "cache": False,
+        "target": None, "target_factor": 8, "symmetry_map": None, "force": False}
+
+
+def test_the_batch_command_s_defaults_are_the_stored_defaults(capsys, monkeypatch, tmp_path):
+    """``shapecond batch`` with no option hands ``run_batch`` the defaults a stored table's key holds."""
+    import shapecond.cli.cmd_batch as cmd_batch
+
+    seen = {}
+
+    def spy(inputs, out, options, what, how):
+        seen.update(options)
+        raise InputError("stop")
+
+    monkeypatch.setattr(cmd_batch, "run_batch", spy)
+    run_cli(capsys, "batch", "demo:sphere", "-o", tmp_path / "never-written.csv")
+    assert with_defaults({**seen, "what": ["score"]}) == with_defaults({}) and set(seen) <= set(DEFAULT_OPTIONS)
+    assert {k: seen[k] for k in ("points", "geodesic_backend", "no_cache", "effort")} == {
+        "points": None, "geodesic_backend": "heat", "no_cache": False, "effort": "default"}
 
 
 # --- one row is what the single-shape commands print ---------------------------------------

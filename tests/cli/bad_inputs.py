@@ -294,18 +294,31 @@ MATCH_ARGV = ["match", GOOD, GOOD, "--landmarks-source", "1", "--landmarks-targe
 
 def bad_values(constraint, cli: bool) -> list:
     """Values a constraint of ``shapecond.api.params`` refuses: command-line words (``cli``) or Python values
-    (past each end of a range, a fraction, a word, NaN, a boolean, None where None is not allowed)."""
-    from shapecond.api.params import Choice, Flag, FloatRange, IntRange
+    (past each end of a range, a fraction, a word, NaN, a boolean, None where None is not allowed; for ids a
+    word, a negative id and a fraction; a file option: a folder on the command line, nothing in Python, where
+    it is checked when read)."""
+    from shapecond.api.params import Choice, File, Flag, FlagOr, Ids, IntRange
 
-    if isinstance(constraint, (Choice, Flag)):
+    none = [] if getattr(constraint, "none", False) else [None]
+    if isinstance(constraint, File):
+        return ["."] if cli else []
+    if isinstance(constraint, Ids):
+        return ["x", "-1", "1.5"] if cli else ["x", -1, 1.5]
+    if isinstance(constraint, (Choice, Flag, FlagOr)):
         words = ["magic"] if isinstance(constraint, Choice) else []  # a flag takes no word
-        return words if cli else ["magic", 1, None]
+        return words if cli else ["magic", 1] + none
     ends = [constraint.lo - (0 if getattr(constraint, "lo_open", False) else 1)] if constraint.lo is not None else []
     ends += [constraint.hi + (0 if getattr(constraint, "hi_open", False) else 1)] if constraint.hi is not None else []
     odd = [1.5] if isinstance(constraint, IntRange) else [float("nan"), float("inf")]
     if cli:
         return [str(v) for v in ends + odd] + ["x"]
-    return ends + odd + ["x", True] + ([] if constraint.none else [None])
+    return ends + odd + ["x", True] + none
+
+
+def table_cases(table, cli: bool) -> list[tuple[str, object, object]]:
+    """(class, the row of ``table``, bad value) for every bad value (``bad_values``) of every row of a parameter
+    table (on the command line, the rows that have an option there)."""
+    return [(f"{p.name} {v!r}", p, v) for p in table if p.cli or not cli for v in bad_values(p.constraint, cli)]
 
 
 def match_option_cases(cli: bool) -> list[tuple[str, object, object, dict]]:

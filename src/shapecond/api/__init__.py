@@ -10,7 +10,8 @@ every door.
   ``metric_shape`` (N farthest-point samples and their distances, diameter 1);
 * ``scores``: ``score`` (σ bracket, Eq. 5; κ bracket, Theorem 4.1; δ(ε);
   verdict), ``local_score`` (Section 5), ``landmarks`` (CNBS and baselines,
-  Section 6), ``heatmap`` (Figures 1 and 4), ``kappa`` (probes of Eq. 4);
+  Section 6), ``heatmap`` (Figures 1 and 4), ``kappa`` (probes of Eq. 4); the
+  tables ``SCORE_PARAMS`` and ``LANDMARK_PARAMS`` of ``score``'s and ``landmarks``'s options;
 * ``problem``: ``SymmetryProblem``, one shape whose searches are kept for
   repeated queries;
 * ``settings``: ``score_settings``, the checked settings of both kinds of score;
@@ -34,7 +35,7 @@ import importlib
 
 #: Where each public name lives; a module is imported when one of its names is first used, so
 #: ``import shapecond`` (and ``shapecond info``) does not load the searches' compiled kernels.
-_HOME = {"DEFAULT_POINTS": "inputs", "info": "inputs", "load": "inputs", "metric_shape": "inputs",
+_HOME = {"DEFAULT_POINTS": "params", "info": "inputs", "load": "inputs", "metric_shape": "inputs",
          "require_mesh": "inputs", "match": "matching", "ShapeOptions": "options", "SymmetryProblem": "problem",
          "HeatMapResult": "results", "KappaResult": "results", "LandmarkResult": "results", "LocalResult": "results",
          "MatchResult": "results", "ScoreResult": "results", "heatmap": "scores", "kappa": "scores",

@@ -38,8 +38,9 @@ from ..errors import InputError, ShapecondError
 from ..shapes.landmark_files import check_in_range, landmarks_of, pair_by_label, read_landmark_csv
 from ..shapes.pairs_list import read_pairs
 from ..matching.sampled import sample_surface
-from .inputs import DEFAULT_POINTS, load
+from .inputs import load
 from .matching import match
+from .params import DEFAULT_POINTS
 
 #: Direction of every map of a collection.
 DIRECTION = "template to shape"

@@ -30,9 +30,7 @@ from ..shapes.io import describe_input, load_input, read_symmetry_map
 from ..shapes.metric import MetricShape, build_metric_shape, from_distance_matrix
 from ..shapes.validate import clean_mesh
 from .options import ShapeOptions, refuse_unknown
-
-#: N when ``n_points`` is not given (the paper's): 400, or every vertex of a smaller shape.
-DEFAULT_POINTS = 400
+from .params import DEFAULT_POINTS
 
 
 def _from_array(a: np.ndarray, name: str):
@@ -186,4 +184,4 @@ def require_mesh(g):
     return g
 
 
-__all__ = ["DEFAULT_POINTS", "info", "load", "metric_shape", "refuse_unknown", "require_mesh", "shape_of"]
+__all__ = ["info", "load", "metric_shape", "refuse_unknown", "require_mesh", "shape_of"]

@@ -28,8 +28,9 @@ import numpy as np
 from ..checks import parse_ids
 from ..errors import InputError
 from ..jsonable import jsonable
-from .inputs import DEFAULT_POINTS, load
+from .inputs import load
 from .matching import load_pair, match_options, pair_problem
+from .params import DEFAULT_POINTS
 
 
 #: Shapes matched to the first one of a collection to read its level (``collection_level``).

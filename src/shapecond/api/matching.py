@@ -13,9 +13,9 @@ from ..matching.seeded import FAQOptions
 from ..matching.spectral import LH05Options
 from ..matching.zoomout import ZoomOutOptions
 from .guards import guard_match
-from .inputs import DEFAULT_POINTS, load
-from .params import (BACKEND, CACHE, FORCE, LARGEST_COMPONENT, MAX_POINTS, SEED, Choice, Flag, FloatRange, IntRange,
-                     Param, check_keywords, grouped)
+from .inputs import load
+from .params import (BACKEND, CACHE, DEFAULT_POINTS, FORCE, LARGEST_COMPONENT, POINTS, SEED, Choice, Flag, FloatRange,
+                     IntRange, Param, check_keywords, grouped)
 from .results import MatchResult
 
 _ZOOMOUT = "The ZoomOut dense stage (--dense zoomout, --matcher zoomout): "
@@ -32,9 +32,7 @@ MATCH_PARAMS = (
           "lh05: Leordeanu-Hebert spectral matching of the samples (the paper); faq: seeded graph matching of the "
           "samples; zoomout: from the landmarks alone (at least 3), by the dense stage.", ("match", None),
           ("--matcher",)),
-    Param("n_points", IntRange(3, MAX_POINTS), DEFAULT_POINTS, "Number of farthest-point samples N.",
-          ("match", None), ("--points", "-n")),
-    SEED, BACKEND,
+    POINTS.with_default(DEFAULT_POINTS), SEED, BACKEND,
     Param("k", IntRange(1, 10_000), 20, "lh05: candidate target samples per source sample.", ("lh05", None), ("--k",)),
     Param("rounding", Choice(("greedy", "assignment")), "assignment",
           "lh05: a linear assignment or the paper's greedy discretisation.", ("lh05", None), ("--rounding",)),

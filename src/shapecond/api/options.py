@@ -12,12 +12,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
-from ..checks import check_choice, check_flag, check_float
+from ..checks import check_flag
 from ..errors import InputError
 from ..selection import CNBS_EXTRAS, COMMON_OPTIONS, SCORES, LandmarkOptions, check_method_options, own_options_class
 from ..shapes.metric import Sampling
+from .params import EFFORT, EPSILON, SHAPE_PARAMS, Choice, Param
 
-EFFORTS = ("quick", "default", "thorough")
+#: Which score follows each landmark (``selection.LandmarkOptions.score``; None: the method's own).
+LANDMARK_SCORE = Param("score", Choice(SCORES, none=True), None,
+                       "Score after each landmark: sigma (the paper's) or scale (δ(ε)).", cli=("--score",),
+                       cli_default="scale for cnbs-scale, sigma otherwise")
 
 
 def refuse_unknown(options: dict, caller: str) -> None:
@@ -70,6 +74,11 @@ class ShapeOptions:
                         progress=self.progress, force=self.force)
 
     @classmethod
+    def of(cls, values: dict) -> ShapeOptions:
+        """The options among ``values`` (a function's keywords checked by its table, ``params.check_keywords``)."""
+        return cls(**{p.name: values[p.name] for p in SHAPE_PARAMS})
+
+    @classmethod
     def take(cls, options: dict, caller: str, others=()) -> tuple[ShapeOptions, dict]:
         """Split ``options`` into ``ShapeOptions`` and the keywords named in ``others``.
 
@@ -94,12 +103,9 @@ def landmark_options(method: str, seed: int, options: dict) -> tuple[LandmarkOpt
     kw = dict(options)
     runtime = {k: kw.pop(k) for k in CNBS_EXTRAS if k in kw}
     common = {k: kw.pop(k) for k in COMMON_OPTIONS if k in kw}
-    if common.get("epsilon") is not None:  # every method takes it; a bad value is refused by all
-        common["epsilon"] = check_float(common["epsilon"], "epsilon", lo=0.0)
-    if common.get("score") is not None:
-        check_choice(common["score"], "score", SCORES)
-    if "effort" in common:
-        common["effort"] = check_choice(common["effort"], "effort", EFFORTS)
+    for p in (EPSILON, LANDMARK_SCORE, EFFORT):  # every method takes them; a bad value is refused by all
+        if p.name in common:
+            common[p.name] = p.check(common[p.name])
     common["fixed"] = tuple(int(v) for v in common.get("fixed", ()))
     cls, start = own_options_class(method), runtime.pop("options", None)
     own = None if cls is None else replace(start, **kw) if isinstance(start, cls) else cls(**kw)

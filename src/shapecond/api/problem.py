@@ -15,7 +15,8 @@ from ..symmetry.scale import budget_of, default_epsilon
 from ..symmetry.search import witness_search
 from .guards import guard_heat_map, guard_landmarks
 from .inputs import shape_of
-from .options import EFFORTS, ShapeOptions, landmark_options, refuse_unknown
+from .options import ShapeOptions, landmark_options, refuse_unknown
+from .params import EFFORT
 from .results import HeatMapResult, LandmarkResult, ScoreResult, promote
 from .settings import score_settings
 
@@ -49,7 +50,7 @@ class SymmetryProblem:
                  **options):
         opts, _ = ShapeOptions.take({**options, "seed": seed}, "SymmetryProblem")
         self.seed = check_seed(seed)
-        self.effort = check_choice(effort, "effort", EFFORTS)
+        self.effort = EFFORT.check(effort)
         self.force = opts.force
         self.shape = shape_of(x, n_points, landmarks, opts)
         self._searches: dict = {}

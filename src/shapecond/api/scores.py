@@ -16,20 +16,47 @@ import time
 
 import numpy as np
 
-from ..checks import check_choice, check_float, check_int, parse_ids
+from ..checks import check_float, check_int, parse_ids
 from ..deformation.local_score import ZERO_TOL, LocalProblem
 from ..errors import InputError
-from ..selection import select_landmarks
+from ..selection import METHODS, method_options, select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
 from ..symmetry.report import score_report
 from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
-from .options import EFFORTS, ShapeOptions, landmark_options, refuse_unknown
+from .options import LANDMARK_SCORE, ShapeOptions, landmark_options, refuse_unknown
+from .params import (EFFORT, EPSILON, IDS_HELP, MAX_POINTS, PROGRESS, REQUIRED, SHAPE_OPTIONS, Choice, Flag, Ids,
+                     IntRange, Param, check_keywords)
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
-from .settings import score_settings
+from .settings import EXACT, TIME_LIMIT, UPPER, score_settings
 
 #: Largest N of κ probes beyond the landmarks (exact matching enumerates every map).
 DEFAULT_KAPPA_POINTS = 8
+
+#: The options of ``score``, each declared once (``params``): ``shapecond score``'s options and ``score``'s
+#: keywords are made from it (``progress``: Python only; the command line shows bars on a terminal).
+SCORE_PARAMS = (*SHAPE_OPTIONS,
+                Param("landmarks", Ids(), (), "Input vertex ids (row indices for a matrix) fixed by every map: "
+                      + IDS_HELP + ".", cli=("--landmarks",)),
+                EXACT, UPPER, TIME_LIMIT, EFFORT, EPSILON, PROGRESS)
+METHOD = Param("method", Choice(METHODS), "cnbs",
+               "cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the scale-aware score "
+               "δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel signature extrema); user "
+               "(--user-landmarks); cnbs-local.", cli=("--method",))
+#: The options of ``landmarks`` that every method takes, each declared once (``params``): ``shapecond
+#: landmarks``'s options and ``landmarks``'s keywords are made from it.  A method's own options
+#: (``selection.method_options``: CNBS's ``resolve_fraction``, HKS's ``n_eigs``, ...) are Python only and
+#: checked by the method's options class.
+LANDMARK_PARAMS = (*SHAPE_OPTIONS,
+                   Param("k", IntRange(0, MAX_POINTS), REQUIRED, "Number of landmarks (method user: 0 = all given).",
+                         cli=("-k",)),
+                   METHOD,
+                   Param("user_landmarks", Ids(), None, "For --method user: vertex ids, " + IDS_HELP + ".",
+                         cli=("--user-landmarks",)),
+                   Param("scores", Flag(none=True), None, "Compute the symmetry score after each landmark (always on "
+                         "for cnbs; for the baselines it costs one witness search per landmark).",
+                         cli=("--scores/--no-scores",)),
+                   EFFORT, LANDMARK_SCORE, EPSILON.in_context("--method cnbs-scale or --score scale: "), PROGRESS)
 
 
 def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: bool = False,
@@ -51,6 +78,8 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     effort : "quick", "default" or "thorough" work of the witness search.
     **options : ``epsilon``, the distortion level of the scale-aware score δ(ε) (default: the median
         sample spacing), and the options of ``metric_shape`` (``seed``, ``force``, ``backend``, ...).
+        Every keyword, its constraint and default: ``SCORE_PARAMS``; a bad value or an unknown keyword is
+        refused before any work.
 
     Returns
     -------
@@ -67,11 +96,13 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
     >>> result.verdict.startswith("exact symmetry")
     True
     """
-    opts, extra = ShapeOptions.take(options, "score", others=("epsilon",))
-    settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=effort,
-                              epsilon=extra.get("epsilon"), seed=opts.seed, force=opts.force)
-    shape = shape_of(x, n_points, landmarks, opts)
-    report = score_report(shape, parse_ids(landmarks), settings)
+    v = check_keywords(SCORE_PARAMS, dict(options, n_points=n_points, landmarks=landmarks, exact=exact, upper=upper,
+                                          time_limit=time_limit, effort=effort), "score")
+    opts = ShapeOptions.of(v)
+    settings = score_settings(exact=v["exact"], upper=v["upper"], time_limit=v["time_limit"], effort=v["effort"],
+                              epsilon=v["epsilon"], seed=opts.seed, force=opts.force)
+    shape = shape_of(x, v["n_points"], v["landmarks"], opts)
+    report = score_report(shape, v["landmarks"], settings)
     return promote(report, ScoreResult)
 
 
@@ -112,8 +143,11 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     user_landmarks : input ids placed first among the samples; for ``method="user"``, the landmarks.
     scores : also compute the score after each landmark (always for CNBS; one search each otherwise).
     effort : work of the witness searches.
-    **options : the options of ``metric_shape`` (``seed``, ``force``, ``progress``...) and of the method
-        (``selection.method_options``: ``score``, ``epsilon``, ``resolve_fraction``...).
+    **options : ``score`` and ``epsilon`` (which score follows each landmark, and the level of δ(ε)), the
+        options of ``metric_shape`` (``seed``, ``force``, ``progress``...) and the method's own
+        (``selection.method_options``: ``resolve_fraction``, ``n_eigs``...).  Every keyword every method
+        takes, its constraint and default: ``LANDMARK_PARAMS``; a bad value or an unknown keyword is refused
+        before any work.
 
     Returns
     -------
@@ -126,18 +160,21 @@ def landmarks(x, k: int, method: str = "cnbs", n_points: int | None = None, *, u
     >>> len(result.landmarks), result.method
     (3, 'fps')
     """
-    opts, method_kw = ShapeOptions.take(options, "landmarks", others=set(options))
-    effort = check_choice(effort, "effort", EFFORTS)
-    ids = parse_ids(user_landmarks, "user_landmarks")
+    method = METHOD.check(method)
+    # a misspelt option is refused, naming the nearest option, before any work
+    v = check_keywords(LANDMARK_PARAMS, dict(options, k=k, method=method, n_points=n_points,
+                                             user_landmarks=user_landmarks, scores=scores, effort=effort),
+                       "landmarks", context=f" for method {method!r}", others=method_options(method))
+    opts, ids = ShapeOptions.of(v), v["user_landmarks"]
+    method_kw = {key: value for key, value in options.items() if key not in v}
     if method == "user":
         if not ids:
             raise InputError("method 'user' needs user_landmarks")
         method_kw["ids"] = ids
-    # a misspelt option is refused, naming the method's options, before any work
-    chosen, runtime = landmark_options(method, opts.seed, {**method_kw, "scores": scores, "effort": effort})
-    k = check_int(k, "k", lo=0)
-    shape = shape_of(x, n_points, ids, opts)
-    guard_landmarks(shape, k, method, scores, opts.force)
+    common = {"scores": v["scores"], "effort": v["effort"], "score": v["score"], "epsilon": v["epsilon"]}
+    chosen, runtime = landmark_options(method, opts.seed, {**method_kw, **common})
+    k, shape = v["k"], shape_of(x, v["n_points"], ids, opts)
+    guard_landmarks(shape, k, method, v["scores"], opts.force)
     if opts.progress and method in ("cnbs", "cnbs-scale"):
         runtime.setdefault("progress", _cnbs_progress(k))
     return promote(select_landmarks(shape, k, method, chosen, **runtime), LandmarkResult)
@@ -224,4 +261,4 @@ def _bar(total: int, desc: str):
     return tqdm(total=total, desc=desc, unit=desc[:-1], leave=False)
 
 
-__all__ = ["heatmap", "kappa", "landmarks", "local_score", "score"]
+__all__ = ["LANDMARK_PARAMS", "SCORE_PARAMS", "heatmap", "kappa", "landmarks", "local_score", "score"]

@@ -2,19 +2,19 @@
 
 from __future__ import annotations
 
-import numpy as np
-
-from ..checks import check_choice, check_flag, check_float
-from ..errors import InputError
 from ..symmetry.report import ScoreSettings
-from .options import EFFORTS
+from .params import EFFORT, EPSILON, FloatRange, Flag, FlagOr, Param
 
-
-def check_exact(exact):
-    """``exact`` if it is "auto", True or False (a numpy bool too); ``InputError`` otherwise."""
-    if isinstance(exact, (bool, np.bool_)) or (isinstance(exact, str) and exact == "auto"):
-        return exact
-    raise InputError(f"exact must be 'auto', True or False, got {exact!r}")
+#: The options of a score itself (``symmetry.report.ScoreSettings``), in the table of ``score``
+#: (``scores.SCORE_PARAMS``) and checked here for ``SymmetryProblem.score`` too.
+EXACT = Param("exact", FlagOr("auto"), "auto", "Compute σ exactly (enumeration or branch and bound within "
+              "--time-limit); by default only when enumeration is quick (N <= 9).", cli=("--exact",))
+UPPER = Param("upper", Flag(), False, "LP upper bound when σ is not known exactly (small N only).", cli=("--upper",))
+TIME_LIMIT = Param("time_limit", FloatRange(0, lo_open=True, none=True), None,
+                   "Seconds for the whole score once the distances are known: the witness search, the exact and LP "
+                   "solves and delta(eps) stop at what they have when it is reached, and the JSON's time_limited is "
+                   "true (computing geodesics or compiling the kernels the first time is not bounded; they warn when "
+                   "long).", cli=("--time-limit",), cli_default="none: the searches run in full, each solve gets 10 s")
 
 
 def score_settings(*, exact="auto", upper=False, time_limit=None, effort="default", epsilon=None, seed=0,
@@ -33,8 +33,5 @@ def score_settings(*, exact="auto", upper=False, time_limit=None, effort="defaul
     ...
     shapecond.errors.InputError: upper must be True or False, got 'no'
     """
-    return ScoreSettings(exact=check_exact(exact), upper=check_flag(upper, "upper"),
-                         time_limit=None if time_limit is None else check_float(time_limit, "time_limit", lo=0.0,
-                                                                                lo_open=True),
-                         seed=seed, effort=check_choice(effort, "effort", EFFORTS), force=force,
-                         epsilon=None if epsilon is None else check_float(epsilon, "epsilon", lo=0.0))
+    return ScoreSettings(exact=EXACT.check(exact), upper=UPPER.check(upper), time_limit=TIME_LIMIT.check(time_limit),
+                         seed=seed, effort=EFFORT.check(effort), force=force, epsilon=EPSILON.check(epsilon))

@@ -19,17 +19,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._version import __version__
+from ..api.params import EFFORT, EPSILON, SHAPE_OPTIONS, SHAPE_PARAMS, cli_defaults, from_cli_keys
 from ..checks import check_float
 from ..errors import InputError, ShapecondError
 from ..parallel import PeakMemory, worker_name
 from . import schema
 from .inputs import content_hash
 
-#: The options of ``shapecond score`` a batch takes, with the command line's defaults.
-DEFAULT_OPTIONS = {"points": None, "metric": "geodesic", "geodesic_backend": "heat", "seed": 0,
-                   "largest_component": False, "no_cache": False, "target": None, "target_factor": 8,
-                   "symmetry_map": None, "effort": "default", "what": ["score"], "force": False, "epsilon": None,
-                   "matcher": None, "landmark_table": None, "pairs": None, "both_directions": False}
+#: The options of ``shapecond score`` a batch takes (``api.params``), with the command line's defaults.
+#: They are held, and stored in the ``params`` column, under the command line's names (``params.cli_key``:
+#: ``points``, ``geodesic_backend``, ``no_cache``), which the tables written so far hold; ``shape_keywords``
+#: gives the Python keywords.
+DEFAULT_OPTIONS = {**cli_defaults((*SHAPE_OPTIONS, EFFORT, EPSILON)), "what": ["score"], "matcher": None,
+                   "landmark_table": None, "pairs": None, "both_directions": False}
 #: ``epsilon`` read off the collection itself (``api.level.collection_level``) rather than given.
 COLLECTION = "collection"
 #: Options of matching (``--what match:TEMPLATE``): left out of the parameters of a batch without it.
@@ -193,15 +195,12 @@ def _fill(row: dict, spec: str, options: dict, match=None) -> None:
     from .. import api
 
     what = parse_what(options.get("what") or ["score"])
-    force = bool(options.get("force", False))
     info = api.info(spec)
     row.update(kind=info["kind"], vertices=info["n_vertices"], faces=info["n_faces"],
                components=info["components"], problems="; ".join(info["problems"]) or None)
-    kw = dict(metric=options.get("metric") or "geodesic", backend=options.get("geodesic_backend") or "heat",
-              seed=options.get("seed", 0), target=options.get("target"), target_factor=options.get("target_factor") or 8,
-              cache=not options.get("no_cache", False), force=force,
-              largest_component=bool(options.get("largest_component", False)), symmetry_map=options.get("symmetry_map"))
-    effort = options.get("effort", "default")
+    kw = shape_keywords(options)
+    effort = options.get("effort") or EFFORT.default
+    force = kw["force"]
     loaded = api.load(spec, largest_component=kw["largest_component"], symmetry_map=kw["symmetry_map"], force=force)
     shape = None
     if what.score or what.landmarks:
@@ -224,6 +223,12 @@ def _fill(row: dict, spec: str, options: dict, match=None) -> None:
                    landmark_scores=[math.nan if s is None else float(s) for s in res.scores])
     if what.matching:
         _match_columns(row, match, loaded, {**kw, "points": options.get("points"), "matcher": options.get("matcher")})
+
+
+def shape_keywords(options: dict) -> dict:
+    """The keywords of ``api.metric_shape`` (``params.SHAPE_PARAMS``) from a batch's ``options``, held
+    under the command line's names (missing or None: the default)."""
+    return from_cli_keys(SHAPE_PARAMS, options)
 
 
 def _match_columns(row: dict, job, shape, kw: dict) -> None:

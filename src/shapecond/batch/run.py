@@ -25,7 +25,7 @@ from . import schema
 from .inputs import content_hashes, expand_inputs
 from .matches import MatchPlan, plan_matching
 from .report import annotate_more, collection_landmark, write_report
-from .rows import COLLECTION, params_key, shape_row, with_defaults
+from .rows import COLLECTION, params_key, shape_keywords, shape_row, with_defaults
 from .table import Table, table_format
 
 #: How many of the most symmetric shapes and of the failures the summary lists.
@@ -185,9 +185,9 @@ def _collection_level(specs: list, options: dict):
     from ..api import DEFAULT_POINTS
     from ..api.level import collection_level
 
-    return collection_level(specs, n_points=options["points"] or DEFAULT_POINTS, seed=options["seed"],
-                            backend=options["geodesic_backend"], cache=not options["no_cache"],
-                            force=options["force"], largest_component=options["largest_component"])
+    kw = shape_keywords(options)
+    return collection_level(specs, n_points=options["points"] or DEFAULT_POINTS,
+                            **{k: kw[k] for k in ("seed", "backend", "cache", "force", "largest_component")})
 
 
 def _score(table, todo, options, how: BatchRun, plan: MatchPlan) -> str:

@@ -5,13 +5,16 @@ See ``shapecond.batch`` for the table, resuming and where the work runs.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import click
 
+from ..api.params import EFFORT, EPSILON
 from ..batch import format_summary, run_batch
 from ..batch.run import BatchRun
 from ..errors import InputError
 from ..matching.pipeline import MATCHERS
-from .common import (Command, Float, OutputFile, emit_json, json_option, pop_shape_options, progress_enabled,
+from .common import (Command, OutputFile, emit_json, json_option, param_option, pop_shape_options, progress_enabled,
                      shape_options)
 
 #: Exit status when some shapes failed (their rows hold the error).
@@ -24,8 +27,7 @@ EXIT_SOME_FAILED = 3
               help="Output table: .parquet (needs pyarrow), .csv or .jsonl; a regular file (not a link) "
                    "that is missing, empty or a batch table.")
 @shape_options
-@click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
-              show_default=True, help="Work spent by the witness searches.")
+@param_option(EFFORT)
 @click.option("--what", "what", multiple=True, default=("score",), show_default=True,
               help="What to compute besides info, repeatable or comma-separated: score, local, "
                    "landmarks:K:METHOD (e.g. landmarks:5:fps), match:TEMPLATE (the template, a file or the name of one "
@@ -42,9 +44,8 @@ EXIT_SOME_FAILED = 3
 @click.option("--both-directions", "both_directions", is_flag=True,
               help="Matching: each map both ways (template -> shape and shape -> template, or both ways of "
                    "each pair), both in maps/ with names saying the direction, and their cycle_error.")
-@click.option("--epsilon", type=Float(0.0), default=None,
-              help="Distortion level ε of δ(ε) for every shape, RMS, in diameters [default: each shape's median "
-                   "sample spacing].")
+@param_option(replace(EPSILON, help="Distortion level ε of δ(ε) for every shape, RMS, in diameters.",
+                      cli_default="each shape's median sample spacing"))
 @click.option("--epsilon-from-collection", "epsilon_collection", is_flag=True,
               help="Read ε off the collection itself: its first shape matched to the next few "
                    "(api.level.collection_level), the median distortion of the maps, no ground truth.")

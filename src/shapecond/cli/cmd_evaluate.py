@@ -28,8 +28,8 @@ from ..evaluation.report import by_protocol, correlations, protocols, write_repo
 from ..evaluation.run import DEFAULT_MATCHERS, DEFAULT_METHODS, PROTOCOL_CHOICES
 from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..parallel import runner
-from .common import (BACKEND_OPTION, NO_CACHE_OPTION, SEED_OPTION, Command, Int, emit_json, force_option, info,
-                     json_option, points_option, progress_enabled)
+from .common import (BACKEND_OPTION, NO_CACHE_OPTION, POINTS_OPTION, SEED_OPTION, Command, Int, emit_json,
+                     force_option, info, json_option, progress_enabled)
 
 
 def _names(text, allowed=None, what="name"):
@@ -71,7 +71,7 @@ def _counts(text) -> list[int]:
               show_default=True, help="Folder for report.md, results.json and the PNG plots.")
 @click.option("--quick", is_flag=True,
               help="A small run: wolf and centaur (or the first two classes), 2 targets each, N = 200.")
-@points_option()
+@POINTS_OPTION
 @click.option("--max-targets", type=Int(1), default=None, help="Match at most this many shapes per class.")
 @SEED_OPTION
 @BACKEND_OPTION

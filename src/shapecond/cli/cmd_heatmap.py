@@ -5,12 +5,13 @@ from __future__ import annotations
 import click
 
 from ..api import heatmap
+from ..api.params import IDS_HELP
 from ..checks import parse_ids
 from ..errors import InputError
 from ..jsonable import fmt
 from ..selection.cnbs import RESOLVE_FRACTION
 from .cmd_landmarks import _up
-from .common import (IDS_HELP, Command, Float, OutputFile, api_options, emit_json, epsilon_options, info,
+from .common import (Command, Float, OutputFile, api_options, emit_json, epsilon_options, info,
                      json_option, pop_shape_options, resolve_epsilon, shape_options)
 
 

@@ -11,9 +11,10 @@ from __future__ import annotations
 import click
 
 from ..api import kappa
+from ..api.params import IDS_HELP
 from ..checks import parse_ids
 from ..jsonable import fmt
-from .common import (IDS_HELP, Command, Float, Int, api_options, emit_json, info, json_option,
+from .common import (Command, Float, Int, api_options, emit_json, info, json_option,
                      pop_shape_options, shape_options)
 
 

@@ -4,52 +4,35 @@ from __future__ import annotations
 
 import click
 
-from ..api import landmarks
-from ..checks import parse_ids
+from ..api.scores import LANDMARK_PARAMS, landmarks
 from ..jsonable import fmt
-from ..selection import METHODS, SCORES
-from .common import (IDS_HELP, Command, Int, OutputFile, api_options, emit_json, epsilon_options, info,
-                     json_option, pop_shape_options, resolve_epsilon, shape_options)
+from .common import (EPSILON_FROM_OPTION, Command, OutputFile, emit_json, info, json_option, progress_enabled,
+                     resolve_epsilon, table_options, table_values)
 
 
 @click.command("landmarks", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
-@shape_options
-@click.option("-k", "k", type=Int(0, 100_000), required=True, help="Number of landmarks (method user: 0 = all given).")
-@click.option("--method", type=click.Choice(METHODS), default="cnbs", show_default=True,
-              help="cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the "
-                   "scale-aware score δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel "
-                   "signature extrema); user (--user-landmarks); cnbs-local.")
-@click.option("--user-landmarks", default=None, help="For --method user: vertex ids, " + IDS_HELP + ".")
-@click.option("--scores/--no-scores", default=None,
-              help="Compute the symmetry score after each landmark (always on for cnbs; for the "
-                   "baselines it costs one witness search per landmark).")
-@click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
-              show_default=True, help="Effort of the witness searches.")
-@click.option("--score", "score", type=click.Choice(SCORES), default=None,
-              help="Score after each landmark: sigma (the paper's) or scale (δ(ε)) "
-                   "[default: scale for cnbs-scale, sigma otherwise].")
-@epsilon_options("--method cnbs-scale or --score scale: ")
+@table_options(LANDMARK_PARAMS)
+@EPSILON_FROM_OPTION
 @click.option("--png", type=OutputFile(), default=None, help="Picture of the landmarks (PNG).")
 @click.option("--ply", type=OutputFile(), default=None, help="Mesh with landmarks painted (PLY).")
 @click.option("--html", type=OutputFile(), default=None,
               help="Self-contained HTML page of the landmarks in order with their scores.")
 @click.option("--up", type=click.Choice(["x", "y", "z"]), default=None, help="Vertical axis of the pictures.")
 @json_option
-def command(input_spec, k, method, **o):
+def command(input_spec, **o):
     """Choose K landmarks and report the symmetry score after each one.
 
     Landmarks are vertex ids of INPUT (rows for a distance matrix), in order; scores
     are the global symmetry score (lower bound with witness) with the first 1, 2, ...
     landmarks fixed: the paper's "vector of symmetry scores".
     """
-    n_points, options = api_options(pop_shape_options(o))
-    user_ids = parse_ids(o["user_landmarks"], "--user-landmarks") if o["user_landmarks"] else []
-    if method == "user" and not user_ids:
+    kw = table_values(LANDMARK_PARAMS, o)  # the options of sc.landmarks (api.scores.LANDMARK_PARAMS)
+    method = kw["method"]
+    if method == "user" and not kw["user_landmarks"]:
         raise click.UsageError("--method user needs --user-landmarks")
-    epsilon, source = resolve_epsilon(input_spec, o, n_points, options)
-    result = landmarks(input_spec, k, method, n_points, user_landmarks=user_ids, scores=o["scores"],
-                       effort=o["effort"], score=o["score"], epsilon=epsilon, **options)
+    epsilon, source = resolve_epsilon(input_spec, {**o, "epsilon": kw.pop("epsilon")}, kw["n_points"], kw)
+    result = landmarks(input_spec, **kw, epsilon=epsilon, progress=progress_enabled())
     _pictures(result, o, title=f"{method}: " + ", ".join(f"{v}" for v in result.landmarks))
     d = result.to_dict()
     if o["as_json"]:

@@ -14,11 +14,12 @@ import click
 from ..api import load, local_score
 from ..api.guards import guard_local
 from ..api.inputs import require_mesh
+from ..api.params import IDS_HELP
 from ..limits import CostWarning
 from ..checks import parse_ids
 from ..deformation.energy import ALPHA_RANGE, DEFAULT_ALPHA, ENERGIES
 from ..deformation.local_score import ZERO_TOL
-from .common import IDS_HELP, Command, Float, OutputFile, emit_json, force_option, info, json_option
+from .common import Command, Float, OutputFile, emit_json, force_option, info, json_option
 
 
 @click.command("local", cls=Command)

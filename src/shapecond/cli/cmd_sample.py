@@ -9,10 +9,11 @@ import click
 import numpy as np
 
 from ..api import metric_shape
+from ..api.params import IDS_HELP
 from ..checks import parse_ids
 from ..errors import InputError
 from ..output import write_bytes
-from .common import (IDS_HELP, Command, OutputFile, api_options, emit_json, info, json_option,
+from .common import (Command, OutputFile, api_options, emit_json, info, json_option,
                      pop_shape_options, shape_options)
 
 

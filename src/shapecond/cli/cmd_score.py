@@ -16,32 +16,18 @@ import time
 import click
 import numpy as np
 
-from ..api import score
-from ..checks import parse_ids
+from ..api.scores import SCORE_PARAMS, score
 from ..jsonable import fmt
-from .common import (IDS_HELP, Command, Float, OutputFile, api_options, emit_json, epsilon_options, info,
-                     json_option, pop_shape_options, resolve_epsilon, shape_options)
+from .common import (EPSILON_FROM_OPTION, Command, OutputFile, emit_json, info, json_option, progress_enabled,
+                     resolve_epsilon, table_options, table_values)
 
 
 @click.command("score", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
-@shape_options
-@click.option("--landmarks", default=None, help="Input vertex ids (row indices for a matrix) fixed by every "
-              "map: " + IDS_HELP + ".")
-@click.option("--exact", "exact", is_flag=True, help="Compute σ exactly (enumeration or branch and bound "
-              "within --time-limit); by default only when enumeration is quick (N <= 9).")
-@click.option("--upper", is_flag=True, help="LP upper bound when σ is not known exactly (small N only).")
-@click.option("--time-limit", type=Float(0.0, lo_open=True), default=None,
-              help="Seconds for the whole score once the distances are known: the witness search, "
-              "the exact and LP solves and delta(eps) stop at what they have when it is reached, and "
-              "the JSON's time_limited is true (computing geodesics or compiling the kernels the first "
-              "time is not bounded; they warn when long).  [default: none: the searches run in full, "
-              "each solve gets 10 s]")
-@click.option("--effort", type=click.Choice(["quick", "default", "thorough"]), default="default",
-              show_default=True, help="Work spent by the witness search.")
+@table_options(SCORE_PARAMS)
+@EPSILON_FROM_OPTION
 @click.option("--witness-png", type=OutputFile(), default=None,
               help="Write a picture of the witness map (meshes and point clouds).")
-@epsilon_options("")
 @click.option("--scale-witness-png", type=OutputFile(), default=None,
               help="Write a picture of the scale-aware witness (the widest self-map within ε).")
 @click.option("--html", type=OutputFile(), default=None,
@@ -50,10 +36,9 @@ from .common import (IDS_HELP, Command, Float, OutputFile, api_options, emit_jso
 def command(input_spec, **o):
     """How hard is INPUT to match: σ bracket, κ bracket and the witness map."""
     t0 = time.perf_counter()
-    n_points, options = api_options(pop_shape_options(o))
-    epsilon, source = resolve_epsilon(input_spec, o, n_points, options)
-    result = score(input_spec, n_points, landmarks=parse_ids(o["landmarks"]), exact=True if o["exact"] else "auto",
-                   upper=o["upper"], time_limit=o["time_limit"], effort=o["effort"], epsilon=epsilon, **options)
+    kw = table_values(SCORE_PARAMS, o)  # the options of sc.score (api.scores.SCORE_PARAMS)
+    epsilon, source = resolve_epsilon(input_spec, {**o, "epsilon": kw.pop("epsilon")}, kw["n_points"], kw)
+    result = score(input_spec, **kw, epsilon=epsilon, progress=progress_enabled())
     _pictures(result, o["witness_png"], o["scale_witness_png"], o["html"])
     report = {**result.to_dict(), **source}
     report["seconds"] = time.perf_counter() - t0  # everything, geodesics included

@@ -7,8 +7,9 @@
 use the parameter types ``Int``, ``Float`` and ``SEED``, which call the checks
 of ``shapecond.checks``: a bad value gets the same one-line message as from
 the Python functions.  An option declared in a parameter table (``api.params``:
-``match``'s, and the shared ``--seed``, ``--geodesic-backend``, ...) is made by
-``param_option`` (a whole table: ``table_options``), with its name, default,
+``match``'s, ``score``'s, ``landmarks``'s, and the shared ``--points``, ``--seed``,
+``--geodesic-backend``, ...) is made by ``param_option`` (a whole table:
+``table_options``, read back by ``table_values``), with its name, default,
 help and check from the table.  Every sub-command is a :class:`Command`: before
 it runs, the files it writes (options of type :class:`OutputFile`) are checked
 against the files it reads and against each other (``output.check_distinct``).
@@ -20,15 +21,12 @@ import sys
 
 import click
 
-from ..api import DEFAULT_POINTS
-from ..api.params import BACKEND, CACHE, FORCE, LARGEST_COMPONENT, MAX_POINTS, Choice, Flag, IntRange, Param
+from ..api.params import (BACKEND, CACHE, DEFAULT_POINTS, EPSILON, FORCE, POINTS, REQUIRED, SHAPE_OPTIONS, SHAPE_PARAMS,
+                          Choice, File, Flag, FlagOr, Ids, IntRange, Param, cli_key, from_cli_keys)
 from ..api.params import SEED as SEED_PARAM
 from ..checks import check_float, check_int, check_seed
 from ..errors import InputError
 from ..jsonable import dumps
-#: How vertex ids are given, for the help of every ids option (``checks.parse_ids``, ``checks.read_ids``).
-IDS_HELP = ("comma- or space-separated (12,405,877) or a file of ids: every id on every line (1 2 3, 1,2,3 "
-            "or one per line; # comments); a BIM .pid line 'ID 0 0 0' gives ID; fractional ids are refused")
 
 
 def _option_name(param) -> str:
@@ -125,33 +123,31 @@ def progress_enabled() -> bool:
     return sys.stderr.isatty()
 
 
-def points_option(default: int | None = None):
-    """``--points/-n N``: farthest-point samples per shape."""
-    shown = {"default": default, "show_default": True} if default is not None else {"default": None}
-    return click.option("--points", "-n", "points", type=Int(3, MAX_POINTS), **shown,
-                        help="Number of farthest-point samples N" +
-                             ("." if default is not None else f" [default: {DEFAULT_POINTS}]."))
-
-
 def param_option(param: Param, dest: str | None = None):
     """The click option of ``param`` (``api.params``), its value checked by the same constraint.
 
     ``dest``: the name the command reads the value under (default: the Python keyword).  A flag
-    ``--x/--no-x`` gives True or False; a lone ``--no-x`` gives False when given (the Python value),
-    except under another ``dest`` (``no_cache``: the commands not yet made from a table read the
-    flag itself).  An option whose default is None shows ``param.cli_default`` as its default.
+    ``--x/--no-x`` gives True or False (or None, not given, when that is the default); a lone flag gives
+    its Python value when given (``--no-cache``: False; ``--exact``: True), except under another ``dest``
+    (``no_cache``: the commands not made from a table read the flag itself, ``params.cli_key``).  An
+    option whose default is None shows ``param.cli_default`` as its default; one whose default is
+    ``REQUIRED`` is required.
     """
     dest, c = dest or param.name, param.constraint
-    if isinstance(c, Flag):
+    if isinstance(c, (Flag, FlagOr)):
         if "/" in param.cli[0]:
             return click.option(*param.cli, dest, default=param.default, show_default=True, help=param.help)
-        if param.cli[0].startswith("--no-") and dest == param.name:
-            return click.option(*param.cli, dest, flag_value=not param.default, default=param.default,
-                                help=param.help)
-        return click.option(*param.cli, dest, is_flag=True, help=param.help)
+        if dest != param.name:
+            return click.option(*param.cli, dest, is_flag=True, help=param.help)
+        given = (not param.default) if param.cli[0].startswith("--no-") else True
+        kind = click.UNPROCESSED if isinstance(c, FlagOr) else click.BOOL  # "auto" is no boolean
+        return click.option(*param.cli, dest, flag_value=given, default=param.default, type=kind, help=param.help)
     kind = (click.Choice(c.choices) if isinstance(c, Choice) else Int(c.lo, c.hi) if isinstance(c, IntRange)
+            else click.STRING if isinstance(c, Ids) else click.Path(dir_okay=False) if isinstance(c, File)
             else Float(c.lo, c.hi, c.lo_open, c.hi_open))
-    if param.default is None:
+    if param.default is REQUIRED:
+        return click.option(*param.cli, dest, type=kind, required=True, help=param.help)
+    if param.default is None or isinstance(c, Ids):
         shown = f" [default: {param.cli_default}]" if param.cli_default else ""
         return click.option(*param.cli, dest, type=kind, default=None, help=param.help + shown)
     return click.option(*param.cli, dest, type=kind, default=param.default, show_default=True, help=param.help)
@@ -165,11 +161,23 @@ def table_options(table):
     return add
 
 
+def table_values(table, o: dict) -> dict:
+    """The values of the options ``table_options(table)`` made, popped from a command's keyword arguments
+    ``o``, under their Python names.  Vertex ids (``params.Ids``, which may name a file) are read here,
+    after ``Command`` checked the outputs against the inputs, the message naming the option."""
+    out = {}
+    for p in table:
+        if p.cli:
+            value = o.pop(p.name)
+            out[p.name] = p.check(value, p.cli[0]) if isinstance(p.constraint, Ids) else value
+    return out
+
+
 #: The options several commands share, each declared once (``api.params``).
+POINTS_OPTION = param_option(POINTS, cli_key(POINTS))
 SEED_OPTION = param_option(SEED_PARAM)
-BACKEND_OPTION = param_option(BACKEND, "geodesic_backend")
-LARGEST_COMPONENT_OPTION = param_option(LARGEST_COMPONENT)
-NO_CACHE_OPTION = param_option(CACHE, "no_cache")
+BACKEND_OPTION = param_option(BACKEND, cli_key(BACKEND))
+NO_CACHE_OPTION = param_option(CACHE, cli_key(CACHE))
 
 
 def apply(f, options):
@@ -179,26 +187,14 @@ def apply(f, options):
     return f
 
 
+#: The names under which the commands not made from a table (sample, kappa, heatmap, batch) read the shape
+#: options (``params.cli_key``: ``points``, ``geodesic_backend``, ``no_cache``, ...).
+SHAPE_OPTION_NAMES = tuple(cli_key(p) for p in SHAPE_OPTIONS)
+
+
 def shape_options(f):
-    """Options that build the metric shape: --points, --metric, --geodesic-backend, ..."""
-    return apply(f, [
-        points_option(),
-        click.option("--metric", type=click.Choice(["geodesic", "euclidean"]), default="geodesic",
-                     show_default=True, help="Distance between points."),
-        BACKEND_OPTION, SEED_OPTION, LARGEST_COMPONENT_OPTION, NO_CACHE_OPTION,
-        click.option("--target", type=click.Choice(["samples", "dense"]), default=None,
-                     help="Where maps may send samples: other samples (the paper) or a denser FPS set "
-                          "[default: dense for meshes, samples for a distance matrix]."),
-        click.option("--target-factor", type=Int(1, 1000), default=8, show_default=True,
-                     help="Dense targets: M = factor x N points."),
-        click.option("--symmetry-map", type=click.Path(dir_okay=False), default=None,
-                     help="A .sym file (line i = 1-based id of the mirror of vertex i): sample in mirror pairs."),
-        force_option,
-    ])
-
-
-SHAPE_OPTION_NAMES = ("points", "metric", "geodesic_backend", "seed", "largest_component", "no_cache",
-                      "target", "target_factor", "symmetry_map", "force")
+    """Options that build the metric shape: --points, --metric, --geodesic-backend, ... (``params.SHAPE_OPTIONS``)."""
+    return apply(f, [param_option(p, cli_key(p)) for p in SHAPE_OPTIONS])
 
 
 def force_option(f):
@@ -206,15 +202,18 @@ def force_option(f):
     return param_option(FORCE)(f)
 
 
+#: ``--epsilon-from``: ε read off matched maps (``resolve_epsilon``; the command line's own).
+EPSILON_FROM_OPTION = click.option(
+    "--epsilon-from", "epsilon_from", multiple=True, type=click.Path(dir_okay=False),
+    help="Read ε off the maps from INPUT to this shape (repeat for several: their median), found without ground "
+         "truth (api.level): δ at your shapes' own deformation level.")
+
+
 def epsilon_options(what: str):
-    """``--epsilon`` and ``--epsilon-from``: the distortion level ε of δ, given or read off matched maps."""
+    """``--epsilon`` (``params.EPSILON``, its help prefixed by ``what``) and ``--epsilon-from``: the distortion
+    level ε of δ, given or read off matched maps."""
     def add(f):
-        f = click.option("--epsilon-from", "epsilon_from", multiple=True, type=click.Path(dir_okay=False),
-                         help="Read ε off the maps from INPUT to this shape (repeat for several: their median), "
-                              "found without ground truth (api.level): δ at your shapes' own deformation level.")(f)
-        return click.option("--epsilon", type=Float(0.0), default=None,
-                            help=what + "distortion level ε of δ(ε), RMS, in diameters "
-                                 "[default: the median sample spacing].")(f)
+        return apply(f, [param_option(EPSILON.in_context(what)), EPSILON_FROM_OPTION])
     return add
 
 
@@ -244,13 +243,8 @@ def api_options(cli_options: dict, progress: bool | None = None) -> tuple[int | 
 
     ``progress``: progress bars (default: when stderr is a terminal).
     """
-    o = dict(cli_options)
-    kw = {"metric": o.get("metric", "geodesic"), "backend": o.get("geodesic_backend", "heat"),
-          "seed": o.get("seed", 0), "largest_component": o.get("largest_component", False),
-          "cache": not o.get("no_cache", False), "target": o.get("target"), "target_factor": o.get("target_factor", 8),
-          "symmetry_map": o.get("symmetry_map"), "force": o.get("force", False),
-          "progress": progress_enabled() if progress is None else progress}
-    return o.get("points"), kw
+    kw = {**from_cli_keys(SHAPE_PARAMS, cli_options), "progress": progress_enabled() if progress is None else progress}
+    return cli_options.get(cli_key(POINTS)), kw
 
 
 def emit_json(obj) -> None:
