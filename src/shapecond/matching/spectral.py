@@ -207,7 +207,9 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
         indices = np.empty(bound, dtype=np.int32)
         data = np.empty(bound, dtype=np.float32)
         indptr = _sparse_affinity_kernel((indices, data), Ds, Dt, (src, tgt), (order, starts), near, kp)
-        return sp.csr_matrix((data[:indptr[-1]], indices[:indptr[-1]], indptr), shape=(C, C))
+        for a in (indices, data):  # cut to the entries in place (realloc): a view of the larger array
+            a.resize(indptr[-1], refcheck=False)  # would be copied by scipy's csr_matrix (its ``prune``)
+        return sp.csr_matrix((data, indices, indptr), shape=(C, C))
     if 4 * C * C > MAX_AFFINITY_BYTES:
         raise TooLargeError(
             f"{C} candidates need a {4 * C * C / 2**30:.1f} GB affinity matrix; lower k or N")
