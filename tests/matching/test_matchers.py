@@ -8,7 +8,8 @@ from scipy.spatial.distance import cdist
 from shapecond.errors import InputError
 from shapecond.matching.candidates import (check_landmarks, descriptor_cost, k_best_candidates,
                                            recall)
-from shapecond.matching.seeded import FAQOptions, faq_match
+from shapecond.matching.nested import with_landmarks
+from shapecond.matching.seeded import FAQOptions, faq_match, local_width
 from shapecond.matching.spectral import (LH05Options, affinity_matrix, assignment_rounding, complete_map,
                                          greedy_discretisation, lh05_match, principal_eigenvector)
 
@@ -128,7 +129,7 @@ def test_lh05_recovers_an_isometric_permutation(rounding):
     assert list(m.t[ls]) == list(truth[ls])
 
 
-@pytest.mark.parametrize("objective", ["distance", "gaussian"])
+@pytest.mark.parametrize("objective", ["local", "distance", "gaussian"])
 def test_faq_recovers_an_isometric_permutation(objective):
     _, Ds = _planar(120, 9)
     Dt, truth = _permuted(Ds, 10)
@@ -136,6 +137,61 @@ def test_faq_recovers_an_isometric_permutation(objective):
     m = faq_match(Ds, Dt, ls, truth[ls], options=FAQOptions(objective=objective))
     assert np.mean(m.t == truth) >= 0.98
     assert list(m.t[ls]) == list(truth[ls])
+
+
+def test_local_width_is_the_spacing_over_the_landmark_pairs_mean_log_ratio():
+    """``local_width``, against its definition computed here: a metric stretched by one factor along
+    x (not an isometry) gives a finite width; an exact copy, one landmark, or a width beyond every
+    distance give None (the distance objective)."""
+    p, Ds = _planar(80, 3)
+    q = p * [1.4, 1.0]
+    Dt = cdist(q, q)
+    ls = np.array([0, 5, 9, 17])
+    iu = np.triu_indices(ls.size, 1)
+    r = np.abs(np.log(Dt[np.ix_(ls, ls)][iu] / Ds[np.ix_(ls, ls)][iu])).mean()
+    h = np.median(np.sort(Ds, axis=1)[:, 1])
+    assert local_width(Ds, Dt, ls, ls) == pytest.approx(h / r, rel=1e-12)
+    assert local_width(Ds, Ds, ls, ls) is None
+    assert local_width(Ds, Dt, ls[:1], ls[:1]) is None
+    assert local_width(Ds, Ds * 1.0001, ls, ls) is None  # h / r far beyond the largest distance
+    with pytest.raises(InputError, match="unknown FAQ objective"):
+        FAQOptions(objective="nearest")
+
+
+def test_faq_local_objective_recovers_a_stretched_permutation():
+    """Off isometry (one axis stretched by 1.4, so the width is finite) the local objective still
+    maps a permuted copy's samples onto their images; the width used is reported."""
+    p, Ds = _planar(120, 9)
+    perm = np.random.default_rng(10).permutation(120)
+    q = (p * [1.4, 1.0])[perm]
+    Dt, truth = cdist(q, q), np.argsort(perm)
+    ls = [0, 1, 2, 3]
+    m = faq_match(Ds, Dt, ls, truth[ls], FAQOptions(objective="local"))
+    assert m.info["objective"] == "gaussian" and m.info["sigma"] == local_width(Ds, Dt, ls, truth[ls])
+    assert np.mean(m.t == truth) >= 0.9
+
+
+def test_faq_local_objective_nests_at_its_own_width(monkeypatch):
+    """The first three landmarks' run of ``objective="local"`` uses the width measured on all of
+    them, so the nested maps compare on one objective: the returned map's objective is at least that
+    of the first three's map sent to the other landmarks, at that width."""
+    import shapecond.matching.seeded as seeded
+    calls = []
+    real = seeded.faq_match
+    monkeypatch.setattr(seeded, "faq_match", lambda *a: calls.append(a[4]) or real(*a))
+    rng = np.random.default_rng(4)
+    p, Ds = _planar(90, 4)
+    q = p * [1.3, 1.0] + rng.normal(scale=0.02, size=p.shape)
+    Dt = cdist(q, q)
+    ls = np.array([0, 7, 19, 33, 41, 60])
+    s = local_width(Ds, Dt, ls, ls)
+    K = np.exp(-Ds ** 2 / (2 * s * s)), np.exp(-Dt ** 2 / (2 * s * s))
+    F = lambda t: float((K[0] * K[1][np.ix_(t, t)]).sum())  # noqa: E731
+    full = real(Ds, Dt, ls, ls, FAQOptions(objective="local"))
+    assert [(o.objective, o.sigma) for o in calls] == [("gaussian", s)]  # the nested run, at the width
+    core = real(Ds, Dt, ls[:3], ls[:3], FAQOptions(objective="gaussian", sigma=s))
+    assert full.info["sigma"] == s and full.info["value"] == pytest.approx(F(full.t), rel=1e-12)
+    assert F(full.t) >= F(with_landmarks(core.t, ls, ls)) - 1e-9 * F(full.t)
 
 
 def _fps(p, n, start):

@@ -9,7 +9,7 @@ from ..errors import InputError
 from ..matching.candidates import check_landmarks
 from ..matching.pipeline import DENSE_STAGES, MATCHERS, SAMPLE_MATCHERS, SAMPLINGS, MatchOptions, match_samples
 from ..matching.problem import MatchProblem
-from ..matching.seeded import FAQOptions
+from ..matching.seeded import FAQ_OBJECTIVES, FAQOptions
 from ..matching.spectral import LH05Options
 from ..matching.zoomout import ZoomOutOptions
 from .guards import guard_match
@@ -79,7 +79,10 @@ MATCH_PARAMS = (
           ("lh05", None)),
     Param("nested", Flag(), True, "lh05: with more than 3 landmarks, also match with the first 3; keep the better.",
           ("lh05", None)),
-    Param("objective", Choice(("distance", "gaussian")), "distance", "faq: the objective.", ("faq", None)),
+    Param("objective", Choice(FAQ_OBJECTIVES), "distance",
+          "faq: the objective: distance (the distortion of every sample distance, Eq. 3), gaussian (near pairs "
+          "only), or local (near pairs, the width read off the landmark pairs' distortion; for different species "
+          "whose landmarks leave the extremities free).", ("faq", None), ("--faq-objective",)),
     Param("init", Choice(("descriptor", "barycenter")), "descriptor", "faq: the start.", ("faq", None)),
     Param("sigma", _POSITIVE_OR_NONE, None,
           "faq: kernel width of the gaussian objective [default: from sigma_factor].", ("faq", None)),
