@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..api import load
+from ..api.level import collection_level
 from ..matching.sampled import sample_surface, surface_at
 from ..selection import monotone
 from ..symmetry.scale import scale_score
@@ -40,8 +41,6 @@ def class_epsilon(null_path, targets, setup: ShapeSetup) -> float:
 def matched_level_task(cls: str, null_path, targets, setup: ShapeSetup) -> dict:
     """The class's level read off its matched maps before any landmark (``api.level.collection_level``:
     the null shape against its first targets, no ground truth), in units of its metric shape."""
-    from ..api.level import collection_level
-
     level = collection_level([null_path, *targets], n_points=setup.n_points, seed=setup.seed, backend=setup.backend,
                              cache=setup.cache, force=True)
     return dict(cls=cls, epsilon=in_diameters(null_path, setup, level.epsilon_area))

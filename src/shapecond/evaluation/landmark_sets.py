@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .. import cache as disk
-from ..api import metric_shape
+from ..api import landmarks, metric_shape
 from ..errors import InputError
 from ..limits import CostWarning
 from ..selection import METHODS, monotone
@@ -101,8 +101,6 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
     the matchings.
     """
     import warnings
-
-    from ..api import landmarks
 
     st = Path(null_path).stat()
     key = disk.key_of(LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size, st.st_mtime_ns,
