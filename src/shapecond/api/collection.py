@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, ShapecondError
+from ..output import atomic_open
 from ..shapes.landmark_files import check_in_range, landmarks_of, pair_by_label, read_landmark_csv
 from ..shapes.pairs_list import read_pairs
 from ..matching.sampled import sample_surface
@@ -142,8 +143,6 @@ def template_landmarks(template, table: dict | None = None) -> dict[str, int]:
 
 def write_map(path, vertex_map) -> Path:
     """One target id a line (as ``shapecond match -o``), written atomically."""
-    from ..output import atomic_open
-
     with atomic_open(path, "w") as fh:
         np.savetxt(fh, np.asarray(vertex_map, dtype=np.int64), fmt="%d")
     return Path(path)

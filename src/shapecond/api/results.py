@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
+from ..deformation.heatmap import local_heatmap
 from ..deformation.local_score import LocalScore
 from ..errors import InputError
 from ..jsonable import fmt, jsonable
@@ -26,6 +27,7 @@ from ..limits import check_cost, local_seconds
 from ..selection.result import LandmarkSelection
 from ..symmetry.condition import ProbeResult
 from ..symmetry.report import ScoreReport
+from ..symmetry.starts import classical_mds
 
 
 def style_of(cls, style: dict, defaults: dict):
@@ -109,7 +111,6 @@ class LandmarkResult(LandmarkSelection, Pictures):
         """The landmarks (paper Figure 6 colours) drawn on the shape; onto ``fig`` or written to ``path``.
         ``style``: the fields of ``viz.render.Look`` (``up``, ``views``, ``title``...) and ``cmap``, ``vmin``,
         ``vmax``, ``colorbar_label`` (``look_of``)."""
-        from ..symmetry.starts import classical_mds
         from ..viz.render import new_figure, render_png
         from ..viz.scene import Colouring
 
@@ -135,8 +136,6 @@ class LocalResult(LocalScore, Pictures):
     def doubt(self):
         """The local score with each vertex fixed in turn (modal approximation, ``deformation.heatmap``);
         computed once, from the factorisation the score used."""
-        from ..deformation.heatmap import local_heatmap
-
         if self.drawing is None:
             raise InputError("this result does not know its mesh; use shapecond.local_score()")
         if "field" not in self._doubt:

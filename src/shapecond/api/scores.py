@@ -27,6 +27,7 @@ from .inputs import load, require_mesh, shape_of
 from .options import LANDMARK_SCORE, ShapeOptions, landmark_options, refuse_unknown
 from .params import (EFFORT, EPSILON, IDS_HELP, MAX_POINTS, PROGRESS, REQUIRED, SHAPE_OPTIONS, Choice, Flag, Ids,
                      IntRange, Param, check_keywords)
+from .problem import SymmetryProblem
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 from .settings import EXACT, TIME_LIMIT, UPPER, score_settings
 
@@ -204,8 +205,6 @@ def heatmap(x, landmarks=(), n_points: int | None = None, *, effort: str = "defa
     >>> hm.best in hm.samples
     True
     """
-    from .problem import SymmetryProblem  # problem imports this module's neighbours; a late import keeps them apart
-
     opts, _ = ShapeOptions.take(options, "heatmap")
     problem = SymmetryProblem(x, n_points, landmarks=landmarks, effort=effort, **vars(opts))
     return problem.heatmap(landmarks, resolve_fraction=resolve_fraction, score=score, epsilon=epsilon)

@@ -43,10 +43,13 @@ import os
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from .. import api
 from ..api.collection import (DIRECTION, PAIR_DIRECTIONS, REVERSE, listed_pairs, map_names, pair_map_name,
-                              reverse_name, write_map)
+                              reverse_name, template_landmarks, write_map)
 from ..errors import InputError
-from ..shapes.landmark_files import pair_by_label
+from ..output import write_text
+from ..shapes.formats import read_text
+from ..shapes.landmark_files import check_in_range, landmarks_of, pair_by_label, read_landmark_csv
 from .rows import parse_what
 
 #: The folder of the maps, beside the table.
@@ -212,7 +215,6 @@ def _view_key(row: dict) -> list:
 
 def write_view(path, view: dict, row: dict) -> None:
     """Write the view payload ``view`` of ``row``'s map to ``path`` (atomically), with the row's key."""
-    from ..output import write_text
     from ..viz.mapview import payload_json
 
     write_text(path, payload_json({**view, "key": _view_key(row)}))
@@ -221,8 +223,6 @@ def write_view(path, view: dict, row: dict) -> None:
 def read_view(row: dict) -> dict | None:
     """The view of ``row``'s map, or None: no map, no view file (a batch from before views), an unreadable
     one, or one written for another row (other landmarks, shape or options since)."""
-    from ..shapes.formats import read_text
-
     if not row.get("map_file"):
         return None
     try:
@@ -237,8 +237,6 @@ def read_view(row: dict) -> dict | None:
 
 def _shape_landmarks(specs, table) -> tuple[dict, dict]:
     """(spec -> ``landmarks_of``, spec -> why not): a broken file, or no landmarks, is that shape's error."""
-    from ..shapes.landmark_files import landmarks_of
-
     found, errors = {}, {}
     for spec in specs:
         try:
@@ -257,8 +255,6 @@ def plan_matching(specs, options: dict, out) -> MatchPlan:
     what = parse_what(options["what"])
     if not what.matching:
         return MatchPlan()
-    from ..shapes.landmark_files import read_landmark_csv
-
     names = dict(zip(specs, map_names(specs)))
     both, maps_dir = bool(options["both_directions"]), Path(out).absolute().parent / MAPS_FOLDER
     if what.pairs:
@@ -266,10 +262,6 @@ def plan_matching(specs, options: dict, out) -> MatchPlan:
         table = read_landmark_csv(options["landmark_table"]) if options.get("landmark_table") else None
         found, errors = _shape_landmarks(list(dict.fromkeys(s for p in pairs for s in p)), table)
         return MatchPlan(None, {}, found, errors, names, maps_dir, pairs, both)
-    from .. import api
-    from ..api.collection import template_landmarks
-    from ..shapes.landmark_files import check_in_range
-
     table = read_landmark_csv(options["landmark_table"]) if options.get("landmark_table") else None
     template = template_path(what.match, names)
     loaded = api.load(template, largest_component=bool(options["largest_component"]), force=bool(options["force"]))

@@ -26,6 +26,10 @@ import math
 import os
 from pathlib import Path
 
+from ..api.collection import ANNOTATE_MORE
+from ..output import write_text
+from .matches import read_view
+
 #: The report's file name, beside the table.
 REPORT_NAME = "report.html"
 #: The most bytes of view data a report embeds (about 48 kB a map: some 600 maps).
@@ -140,8 +144,6 @@ def _intro(rows, ok, more, failed) -> str:
 def annotate_more(rows) -> list[dict]:
     """The matched rows whose bar says "annotate more" (``api.collection.ANNOTATE_MORE``), the largest bar
     first (ties: by file)."""
-    from ..api.collection import ANNOTATE_MORE
-
     return sorted((r for r in rows if r["error"] is None and r["bar"] is not None and r["bar"] > ANNOTATE_MORE),
                   key=lambda r: (-r["bar"], r["file"]))
 
@@ -175,7 +177,6 @@ def _collection_advice(rows) -> str:
 
 def report_html(rows: list[dict], views: dict | None = None) -> str:
     """The report page of the batch rows ``rows`` (module docstring); ``views``: {map file: view payload}."""
-    from ..api.collection import ANNOTATE_MORE
     from ..viz.mapview import view_cell
 
     ok = sorted((r for r in rows if r["error"] is None and r["bar"] is not None),
@@ -239,8 +240,5 @@ def _document(body: list[str], kept: dict) -> str:
 def write_report(out, rows: list[dict]) -> Path:
     """Write ``report.html`` beside the table ``out`` (atomically), with the views of its maps
     (``matches.read_view``); return its path."""
-    from ..output import write_text
-    from .matches import read_view
-
     views = {r["map_file"]: read_view(r) for r in rows if r["error"] is None and r.get("map_file")}
     return write_text(Path(out).absolute().parent / REPORT_NAME, report_html(rows, views))

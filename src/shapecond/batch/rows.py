@@ -18,11 +18,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import api
 from .._version import __version__
+from ..api import DEFAULT_POINTS
+from ..api.collection import match_both_ways, match_to_template
 from ..api.params import EFFORT, EPSILON, SHAPE_OPTIONS, SHAPE_PARAMS, cli_defaults, from_cli_keys
 from ..checks import check_float
 from ..errors import InputError, ShapecondError
 from ..parallel import PeakMemory, worker_name
+from ..selection import METHODS
+from ..symmetry import objective
 from . import schema
 from .inputs import content_hash
 
@@ -67,8 +72,6 @@ class What:
 def parse_what(items) -> What:
     """``["score", "local", "landmarks:5:fps", "match:T.off"]`` (or one comma-separated string) -> ``What``;
     ``match`` alone: the pairs of the ``pairs`` option."""
-    from ..selection import METHODS
-
     if isinstance(items, str):
         items = [items]
     parts = [p.strip() for item in items for p in str(item).split(",") if p.strip()] or ["score"]
@@ -192,8 +195,6 @@ def _check_file(spec: str, expected_hash: str | None) -> None:
 
 
 def _fill(row: dict, spec: str, options: dict, match=None) -> None:
-    from .. import api
-
     what = parse_what(options.get("what") or ["score"])
     info = api.info(spec)
     row.update(kind=info["kind"], vertices=info["n_vertices"], faces=info["n_faces"],
@@ -234,9 +235,6 @@ def shape_keywords(options: dict) -> dict:
 def _match_columns(row: dict, job, shape, kw: dict) -> None:
     """The match columns (``schema.MATCH_COLUMNS``) and ``"_map"`` of ``job.reference`` matched to ``shape``;
     with a second direction, ``"_reverse"``: its columns and map (``"_map"``)."""
-    from ..api import DEFAULT_POINTS
-    from ..api.collection import match_both_ways, match_to_template
-
     if job is None:
         raise InputError("matching needs the landmarks of both shapes")
     row.update(match_template=job.template, match_direction=job.directions[0], match_source=job.reference,
@@ -257,8 +255,6 @@ def _match_columns(row: dict, job, shape, kw: dict) -> None:
 
 def _score_columns(row: dict, result) -> None:
     """The global score's columns, from the report ``shapecond score --json`` prints."""
-    from ..symmetry import objective
-
     report, sc = result.to_dict(), result.score
     n = sc.n_points
     moved = np.asarray(sc.witness) != np.arange(n)

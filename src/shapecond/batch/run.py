@@ -20,6 +20,8 @@ import time
 from dataclasses import dataclass, field, replace
 
 from .._version import __version__
+from ..api import DEFAULT_POINTS
+from ..api.level import collection_level
 from ..parallel import check_where, runner, worker_name
 from . import schema
 from .inputs import content_hashes, expand_inputs
@@ -182,9 +184,6 @@ def _level(options: dict, readable: list) -> tuple[dict, str | None]:
 
 def _collection_level(specs: list, options: dict):
     """The collection's level (``api.level.collection_level``) with the batch's shape options."""
-    from ..api import DEFAULT_POINTS
-    from ..api.level import collection_level
-
     kw = shape_keywords(options)
     return collection_level(specs, n_points=options["points"] or DEFAULT_POINTS,
                             **{k: kw[k] for k in ("seed", "backend", "cache", "force", "largest_component")})

@@ -55,6 +55,8 @@ from pathlib import Path
 
 from ..checks import open_regular
 from ..errors import InputError, OutputError
+from ..jsonable import jsonable
+from ..output import atomic_open
 from . import schema
 
 FORMATS = {".parquet": "parquet", ".csv": "csv", ".jsonl": "jsonl", ".ndjson": "jsonl"}
@@ -301,8 +303,6 @@ def _json_rows(lines, tail: bytes, where, strict: bool) -> list[dict]:
 
 
 def _json_line(row: dict) -> str:
-    from ..jsonable import jsonable
-
     return json.dumps(jsonable({k: row.get(k) for k in schema.NAMES}), allow_nan=False) + "\n"
 
 
@@ -426,8 +426,6 @@ class Table:
     def _snapshot(self) -> None:
         import pyarrow as pa
         import pyarrow.parquet as pq
-
-        from ..output import atomic_open
 
         t0 = time.monotonic()
         table = pa.Table.from_pylist([{k: r.get(k) for k in schema.NAMES} for r in self.rows],

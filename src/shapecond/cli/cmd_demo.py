@@ -23,17 +23,16 @@ import numpy as np
 from ..api import landmarks, load, metric_shape, score
 from ..errors import InputError
 from ..jsonable import fmt
+from ..output import write_text
 from .common import SEED, Command, Float, Int, emit_json, force_option, info, json_option, progress_enabled
 
 
 def _pictures(out: Path, shape, score, small, heat, chosen) -> dict:
     from ..viz.heatmap import render_heatmap_png
+    from ..viz.pages import demo_page
     from ..viz.render import Look, render_png
     from ..viz.scene import HeatMapStyle, Place
     from ..viz.witness import render_witness_png
-
-    from ..output import write_text
-    from ..viz.pages import demo_page
 
     paths = {"witness": out / "witness.png", "heatmap": out / "heatmap.png", "landmarks": out / "landmarks.png",
              "html": out / "demo.html"}

@@ -6,6 +6,7 @@ import click
 
 from ..api.scores import LANDMARK_PARAMS, landmarks
 from ..jsonable import fmt
+from ..symmetry.starts import classical_mds
 from .common import (EPSILON_FROM_OPTION, Command, OutputFile, emit_json, info, json_option, progress_enabled,
                      resolve_epsilon, table_options, table_values)
 
@@ -66,7 +67,6 @@ def _up(shape) -> str:
 
 def _ply(result, path) -> None:
     """The shape with its landmarks painted (PLY; a distance matrix by classical MDS)."""
-    from ..symmetry.starts import classical_mds
     from ..viz.ply import write_ply
 
     shape = result.shape

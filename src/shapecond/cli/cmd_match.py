@@ -11,6 +11,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..api import load, match
 from ..api.matching import MATCH_PARAMS, inapplicable
 from ..checks import parse_ids
 from ..errors import InputError
@@ -51,8 +52,6 @@ def command(source, target, landmarks_source, landmarks_target, output, **o):
     (unreferenced by any face).  For two N x N distance matrices (.npy) the map
     is between their rows.  With --json a summary goes to stdout.
     """
-    from ..api import match
-
     if (o["doubt_ply"] or o["doubt_png"] or o["suggest"]) and not o["error_bar"]:
         raise InputError("--doubt-ply, --doubt-png and --suggest read the error bar: drop --no-error-bar")
     t0 = time.perf_counter()
@@ -119,7 +118,6 @@ def _surfaces_up_front(source, target, o: dict) -> tuple:
     drawn = [name for name in ("html", "doubt_ply", "doubt_png", "truth") if o[name] is not None]
     if not drawn:
         return source, target
-    from ..api import load
     from ..viz.truth import read_truth, truth_map
 
     truth = read_truth(o["truth"])

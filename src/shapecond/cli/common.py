@@ -27,6 +27,7 @@ from ..api.params import SEED as SEED_PARAM
 from ..checks import check_float, check_int, check_seed
 from ..errors import InputError
 from ..jsonable import dumps
+from ..output import check_distinct
 
 
 def _option_name(param) -> str:
@@ -100,8 +101,6 @@ class Command(click.Command):
     of its outputs (``output.check_distinct``)."""
 
     def invoke(self, ctx):
-        from ..output import check_distinct
-
         outputs, inputs = [], []
         for param in self.params:
             value = ctx.params.get(param.name)

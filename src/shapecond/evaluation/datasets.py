@@ -46,6 +46,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..shapes.formats import check_file, off_header
+from ..shapes.vts import read_vts
 
 MESH_SUFFIXES = (".off", ".obj", ".ply")
 LAYOUTS = ("shared", "remeshed")
@@ -271,8 +272,6 @@ def check_layout(cls: ClassFolder) -> None:
     ``.vts`` (and ``.sym.vts``) must be readable with ids in range of its mesh's
     header count, and all of them must have the same number of reference points.
     """
-    from ..shapes.vts import read_vts
-
     counts = {p.name: off_vertex_count(p) for p in cls.shapes}
     if cls.layout == "shared":
         if len({c for c in counts.values() if c is not None}) > 1:
@@ -296,8 +295,6 @@ def check_layout(cls: ClassFolder) -> None:
 
 def reference_symmetry(cls: ClassFolder, n_references: int) -> np.ndarray | None:
     """0-based mirror reference point of every reference point (``corres/reference.sym``), or None."""
-    from ..shapes.vts import read_vts
-
     p = cls.symmetry_path()
     if p is None:
         return None

@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..api import load
+from ..api.level import collection_level
+from ..matching.sampled import sample_surface, surface_at
+from ..selection import monotone
+from ..symmetry.scale import scale_score
 from .landmark_sets import ShapeSetup
 
 
 def class_epsilon(null_path, targets, setup: ShapeSetup) -> float:
     """The median over the targets of the RMS distortion of the ground-truth map on the null
     shape's samples, in units of the null shape's metric shape (diameter 1)."""
-    from ..api import load
-    from ..matching.sampled import sample_surface, surface_at
-
     g = load(null_path)
     null = sample_surface(g, setup.n_points, setup.backend, setup.seed, cache=setup.cache)
     scale = setup.metric_shape(g).scale
@@ -39,8 +41,6 @@ def class_epsilon(null_path, targets, setup: ShapeSetup) -> float:
 def matched_level_task(cls: str, null_path, targets, setup: ShapeSetup) -> dict:
     """The class's level read off its matched maps before any landmark (``api.level.collection_level``:
     the null shape against its first targets, no ground truth), in units of its metric shape."""
-    from ..api.level import collection_level
-
     level = collection_level([null_path, *targets], n_points=setup.n_points, seed=setup.seed, backend=setup.backend,
                              cache=setup.cache, force=True)
     return dict(cls=cls, epsilon=in_diameters(null_path, setup, level.epsilon_area))
@@ -63,9 +63,6 @@ def hat_scale_task(cls: str, null_path, sets: dict, setup: ShapeSetup, epsilon_h
 def in_diameters(null_path, setup: ShapeSetup, epsilon_area: float) -> float:
     """A level in units of the null shape's sqrt(area) (``matching.error_bar``) in units of its metric
     shape (diameter 1), the unit of δ's ε."""
-    from ..api import load
-    from ..matching.sampled import sample_surface
-
     g = load(null_path)
     unit = sample_surface(g, setup.n_points, setup.backend, setup.seed, cache=setup.cache).unit
     return float(epsilon_area) * unit / setup.metric_shape(g).scale
@@ -74,9 +71,6 @@ def in_diameters(null_path, setup: ShapeSetup, epsilon_area: float) -> float:
 def scale_at(null_path, sets: dict, setup: ShapeSetup, epsilon: float) -> dict:
     """δ(ε) (quick search) of each landmark set ``sets[method] = (vertices, counts)`` after each count,
     non-increasing in the count, on the null shape's metric shape (ε in its units)."""
-    from ..selection import monotone
-    from ..symmetry.scale import scale_score
-
     shape = setup.metric_shape(null_path)
     where = {int(v): i for i, v in enumerate(shape.samples[:shape.n_samples])}
     out = {}

@@ -18,7 +18,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .. import cache as disk
+from ..api import landmarks, metric_shape
 from ..errors import InputError
+from ..limits import CostWarning
+from ..selection import METHODS, monotone
+from ..symmetry.scale import scale_score
+from ..symmetry.score import ScoreOptions, symmetry_score
+from ..symmetry.search import best_single_swap
 
 #: Landmark counts of the paper's Figure 7 per TOSCA class (other classes: ``DEFAULT_LANDMARKS``).
 PAPER_LANDMARKS = {"horse": 14, "victoria": 13, "michael": 16, "david": 15, "dog": 12,
@@ -44,16 +50,12 @@ class ShapeSetup:
     def metric_shape(self, x):
         """The null shape's metric shape (``sc.metric_shape``: the paper's N samples, bijections);
         the evaluation checked its whole cost up front, so nothing is refused here."""
-        from ..api import metric_shape
-
         return metric_shape(x, self.n_points, backend=self.backend, seed=self.seed, cache=self.cache,
                             target="samples", force=True)
 
 
 def check_method(name: str) -> None:
     """``InputError`` for an unknown landmark method (before any work)."""
-    from ..selection import METHODS
-
     if name not in METHODS and name not in AT_CLASS_LEVEL:
         raise InputError(f"unknown landmark method {name!r} (choose from {', '.join([*METHODS, *AT_CLASS_LEVEL])})")
 
@@ -64,8 +66,6 @@ def sigma_lower_bound(D, n_samples, landmarks, seed=0, quick=False) -> float:
     At N = 400 only the lower bound with its witness is affordable (no exact solve,
     no LP); ``quick`` uses ``effort="quick"``.
     """
-    from ..symmetry.score import ScoreOptions, symmetry_score
-
     res = symmetry_score(D, n_samples, list(landmarks),
                          options=ScoreOptions(exact=False, upper=False, seed=seed, effort="quick" if quick else "default"))
     return float(res.sigma_lower)
@@ -73,16 +73,11 @@ def sigma_lower_bound(D, n_samples, landmarks, seed=0, quick=False) -> float:
 
 def swap_floor(D, n_samples, landmarks) -> float:
     """σ of the best single swap avoiding the landmarks."""
-    from ..symmetry.search import best_single_swap
-
     return float(best_single_swap(D, n_samples, list(landmarks))[0])
 
 
 def _scores(shape, idx, seed) -> dict:
     """σ, its swap floor and δ(ε) after 1, 3 and all landmarks (δ made non-increasing)."""
-    from ..selection import monotone
-    from ..symmetry.scale import scale_score
-
     scores, floor, scale = {}, {}, {}
     counts = sorted({1, min(3, len(idx)), len(idx)})
     for c in counts:
@@ -106,9 +101,6 @@ def landmark_task(cls: str, null_path, method: str, k: int, setup: ShapeSetup, q
     the matchings.
     """
     import warnings
-
-    from ..api import landmarks
-    from ..limits import CostWarning
 
     st = Path(null_path).stat()
     key = disk.key_of(LANDMARK_CACHE_VERSION, str(Path(null_path).resolve()), st.st_size, st.st_mtime_ns,

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..api import load as load_shape
 from ..errors import InputError
 from ..matching import refine
 from ..matching.candidates import recall
@@ -51,6 +52,7 @@ from ..matching.problem import MatchProblem
 from ..matching.sampled import CachedSolver, sample_surface, surface_at, surface_unit
 from ..matching.spectral import fine_kernel
 from ..shapes.geodesics import DistanceSolver
+from ..shapes.vts import read_vts
 from .datasets import ClassFolder, reference_symmetry
 from .landmark_sets import ShapeSetup
 from .records import MatchRecord, curve_points
@@ -99,8 +101,6 @@ def target_task(cls: ClassFolder, target_path, landmark_sets: dict, setup: Match
     protocol : one of ``PROTOCOLS``.
     load : optional callable path -> Geometry (tests); default ``sc.load``.
     """
-    from ..api import load as load_shape
-
     if protocol not in PROTOCOLS:
         raise InputError(f"unknown protocol {protocol!r} ({', '.join(PROTOCOLS)})")
     load = load or load_shape
@@ -246,8 +246,6 @@ def reference_errors(target, ref_target, predictions: dict, backend: str, mirror
 def _mirror_images(cls: ClassFolder, target_path, geometry, ref_target) -> np.ndarray | None:
     """Target vertex of each reference point's mirror image: ``.sym.vts`` of the target, else
     ``reference.sym`` (``datasets``), else None."""
-    from ..shapes.vts import read_vts
-
     p = cls.mirror_path(target_path)
     if p is not None:
         ids = read_vts(p, int(geometry.ids.max()) + 1, f"{cls.name}/corres/{p.name}")
@@ -259,8 +257,6 @@ def _mirror_images(cls: ClassFolder, target_path, geometry, ref_target) -> np.nd
 
 
 def _reference_ids(cls: ClassFolder, shape_path, geometry) -> np.ndarray:
-    from ..shapes.vts import read_vts
-
     n_file = int(geometry.ids.max()) + 1
     ids = read_vts(cls.vts_path(shape_path), n_file, f"{cls.name}/corres/{shape_path.stem}.vts")
     return geometry.to_internal(ids)

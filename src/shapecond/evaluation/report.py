@@ -21,8 +21,11 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import spearmanr
 
-from shapecond.jsonable import fmt
+from shapecond.errors import InputError
+from shapecond.evaluation.datasets import find_classes
+from shapecond.jsonable import dumps, fmt
 from shapecond.matching.metrics import cumulative_curve
+from shapecond.output import staged_outputs, write_text
 
 THRESHOLDS = np.linspace(0.0, 50.0, 101)  # % of half the geodesic diameter
 #: The field's curve: fraction of reference points within a geodesic error of x sqrt(area) (Kim et al. 2011).
@@ -424,9 +427,6 @@ def bar_calibration(records) -> dict:
 
 def null_shapes(ev) -> dict:
     """Class -> path of its null shape, None for a class whose folder cannot be read any more."""
-    from shapecond.errors import InputError
-    from shapecond.evaluation.datasets import find_classes
-
     if "nulls" in ev.settings:  # written by the run (a pairs list's groups are not class folders)
         return {c: (Path(p) if Path(p).is_file() else None) for c, p in ev.settings["nulls"].items()}
     try:
@@ -445,8 +445,6 @@ def write_report(ev, out_dir) -> Path:
     earlier run's report.  A figure or page that fails still leaves the new results.json (and what
     was written before it failed) in place before the error propagates.
     """
-    from shapecond.jsonable import dumps
-    from shapecond.output import staged_outputs, write_text
     from shapecond.viz.pages import write_evaluation_html
 
     out_dir = Path(out_dir)

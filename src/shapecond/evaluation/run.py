@@ -22,8 +22,12 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..api import load
 from ..errors import InputError
-from ..parallel import run_tasks
+from ..limits import check_cost, geodesic_seconds, search_seconds
+from ..matching.pipeline import DENSE_STAGES, MATCHERS
+from ..matching.sampled import sample_surface, surface_at
+from ..parallel import cap_jobs, run_tasks
 from ..shapes.pairs_list import read_pairs
 from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count, pair_groups
 from .deformation_level import class_scale_task, hat_scale_task, matched_level_task
@@ -89,8 +93,6 @@ class EvaluationOptions:
     scores: bool = True
 
     def __post_init__(self):
-        from ..matching.pipeline import DENSE_STAGES, MATCHERS
-
         if self.protocol not in PROTOCOL_CHOICES:
             raise InputError(f"unknown protocol {self.protocol!r} (choose from {', '.join(PROTOCOL_CHOICES)})")
         for m in self.methods:
@@ -168,9 +170,6 @@ def _check_cost(plan: dict, opts: EvaluationOptions) -> None:
     CNBS landmark and 3 searches for the scores; per matching about one second at
     N = 400, growing like N³ (measured on TOSCA by the project's benchmarks).
     """
-    from ..limits import check_cost, geodesic_seconds, search_seconds
-    from ..parallel import cap_jobs
-
     n = opts.shape.n_points
     total, n_shapes, n_matchings = 0.0, 0, 0
     for p in plan.values():
@@ -193,9 +192,6 @@ def prepare_task(path, setup: ShapeSetup, with_metric: bool = False, null_path=N
     gets its own FPS rows (independent and remeshed protocols) and/or the rows at
     the null shape's sample vertices (corresponding, needs ``null_path``).
     """
-    from ..api import load
-    from ..matching.sampled import sample_surface, surface_at
-
     g = load(path)
     s = setup
     if with_metric or set(protocols) & {"independent", "remeshed"}:

@@ -27,10 +27,12 @@ import numpy as np
 from ..errors import InputError
 from ..jsonable import fmt
 from ..matching.problem import truth_errors
-from .html import MAX_DISPLAY_VERTICES, page, summary, table, viewer
+from ..output import write_text
+from ..shapes.io import load_geometry
+from .html import MAX_DISPLAY_VERTICES, inline, page, summary, table, viewer
 from .truth import truth_map
 from .scene import (DEFAULT_VIEWS, Colouring, HeatMapStyle, Place, colour_layer, guess_up, heatmap_scene, idw,
-                    landmark_scene, make_scene, position_colours, witness_scene)
+                    landmark_scene, make_scene, position_colours, shape_points, up_frame, witness_scene)
 
 
 def _name(shape) -> str:
@@ -78,8 +80,6 @@ def heatmap_page(shape, values, *, landmarks=(), lines=(), style: HeatMapStyle =
 
 def landmarks_page(shape, result, *, up=None, title=None) -> str:
     """Page of a ``LandmarkResult`` on its ``MetricShape``: landmarks in order with the score after each."""
-    from .scene import shape_points
-
     V, F, pts, ids = shape_points(shape)
     verts = list(result.vertices) if shape.geometry is not None else [int(pts[i]) for i in result.sample_indices]
     name = "δ(ε)" if result.score == "scale" else "σ"
@@ -118,8 +118,6 @@ def local_page(geometry, heatmap, fixed=(), *, result=None, title=None) -> str:
 def _pair(src, tgt, up=None):
     """Display coordinates of two shapes side by side (the target beside the source along y), both turned
     so that ``up`` (default: ``guess_up`` of the two together) is vertical."""
-    from .scene import up_frame
-
     up = up or guess_up(src, tgt)
     out = []
     for g in (src, tgt):
@@ -369,8 +367,6 @@ def evaluation_page(ev, folder, text: str, nulls: dict, max_vertices: int = 15_0
 
     ``nulls[cls]``: the path of the class's null shape (None when it cannot be read any more).
     """
-    from ..shapes.io import load_geometry
-
     body = [markdown_html(text, folder), "<h2>Landmarks on the null shapes</h2>"]
     for cls in ev.settings["classes"]:
         path = nulls.get(cls)
@@ -492,15 +488,11 @@ def _match_result_page(result, o: PageOptions) -> str:
 
 def write_result(result, path, options: PageOptions = PageOptions()) -> str:
     """Write ``result_page(result, options)`` to ``path`` atomically; return the path."""
-    from ..output import write_text
-
     return str(write_text(path, result_page(result, options)))
 
 
 def inline_result(result, height: int = 640):
     """``_repr_html_`` of a result: its page in an iframe, or None when it has nothing to draw."""
-    from .html import inline
-
     try:
         return inline(result_page(result), height)
     except InputError:
@@ -509,6 +501,4 @@ def inline_result(result, height: int = 640):
 
 def write_evaluation_html(ev, folder, text: str, nulls: dict) -> str:
     """Write ``report.html`` (``evaluation_page``) into ``folder`` atomically; return its path."""
-    from ..output import write_text
-
     return str(write_text(Path(folder) / "report.html", evaluation_page(ev, folder, text, nulls)))

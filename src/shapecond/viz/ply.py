@@ -14,6 +14,7 @@ import numpy as np
 import trimesh
 
 from ..errors import InputError
+from ..shapes.io import write_mesh
 from .scene import Colouring, colour_layer, landmark_colour
 
 
@@ -78,7 +79,6 @@ def write_ply(path, vertices, faces=None, values=None, landmarks=(), *, ring: bo
         colours[vid] = c
         if nbrs is not None:
             colours[list(nbrs[vid])] = c
-    from ..shapes.io import write_mesh
 
     write_mesh(path, V, F, colors=colours, file_type="ply")
     return str(path)

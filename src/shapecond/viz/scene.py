@@ -22,6 +22,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
+from ..symmetry.starts import classical_mds
 
 #: Default views as (elevation, azimuth) in degrees around the up axis: three-quarter
 #: front, both sides (a mirror ambiguity shows up as a left/right difference) and top.
@@ -390,8 +391,6 @@ def make_scene(vertices, faces, layers, *, ids=None, place: Place = Place()) -> 
 
 def shape_points(shape):
     """(vertices, faces, vertex of each point of Y, ids) of a MetricShape; classical MDS for a matrix."""
-    from ..symmetry.starts import classical_mds
-
     geom = getattr(shape, "geometry", None)
     if geom is not None and getattr(shape, "samples", None) is not None:
         V = np.asarray(geom.vertices, float)

@@ -15,7 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import MAX_ID
 from ..errors import InputError
+from ..shapes.formats import read_text
+from ..shapes.vts import read_vts
 
 
 @dataclass(frozen=True)
@@ -40,8 +43,6 @@ def read_truth(spec):
         raise InputError("--truth: an empty file name")
     parts = text.split(",")
     if not Path(text).exists() and len(parts) == 2 and all(p.lower().endswith(".vts") for p in parts):
-        from ..shapes.vts import read_vts
-
         a, b = read_vts(parts[0]), read_vts(parts[1])
         if a.size != b.size:
             raise InputError(f"--truth: {parts[0]} has {a.size} reference points but {parts[1]} has {b.size}; "
@@ -54,9 +55,6 @@ def read_truth(spec):
 
 def _read_map(path: Path) -> np.ndarray:
     """The ids of a ground-truth map file (``read_truth``)."""
-    from ..checks import MAX_ID
-    from ..shapes.formats import read_text
-
     ids = []
     for number, line in enumerate(read_text(path).splitlines(), 1):
         words = line.split("#", 1)[0].split()
