@@ -86,6 +86,29 @@ def test_the_listed_pairs_are_evaluated_with_flips_and_the_pooled_table(tmp_path
     assert not (tmp_path / "out" / "score_vs_error_remeshed.png").exists()
 
 
+def test_faqs_objective_reaches_the_matchings_and_is_recorded(tmp_path, monkeypatch):
+    """``faq_objective`` (``evaluate --faq-objective``) is the objective of every FAQ matching of the run,
+    written in its settings; the other matchers keep their own options; a bad name is refused in one line."""
+    from shapecond.evaluation import protocols
+    from shapecond.evaluation.protocols import MatchingSetup
+
+    setup = MatchingSetup((3,), ("faq", "lh05"), faq_objective="local")
+    assert setup.options("faq").matcher_options.objective == "local"
+    assert setup.options("lh05") == MatchingSetup((3,), ("lh05",)).options("lh05")
+    assert MatchingSetup((3,), ("faq",)).options("faq") == protocols.MatchOptions(matcher="faq", dense="zoomout")
+    seen = []
+    real = protocols.MatchProblem.__init__
+    monkeypatch.setattr(protocols.MatchProblem, "__init__",
+                        lambda self, *a, **k: seen.append(a[4].matcher_options.objective) or real(self, *a, **k))
+    _flat(tmp_path / "vtx_5k")
+    ev = evaluate_dataset(tmp_path, options=EvaluationOptions(
+        methods=("fps",), matchers=("faq",), n_points=40, pairs=(("strip0", "plate2"),), n_landmarks=3, counts=(3,),
+        error_bars=False, scores=False, dense="nearest", faq_objective="local"))
+    assert seen and set(seen) == {"local"} and ev.settings["faq_objective"] == "local"
+    with pytest.raises(InputError, match="unknown FAQ objective 'Local'"):
+        EvaluationOptions(faq_objective="Local")
+
+
 def test_bad_releases_and_pairs_are_refused_in_one_line(tmp_path):
     root = _flat(tmp_path / "vtx_5k")
     (tmp_path / "p.txt").write_text("strip0 nothere\n")

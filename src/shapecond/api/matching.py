@@ -22,6 +22,13 @@ _ZOOMOUT = "The ZoomOut dense stage (--dense zoomout, --matcher zoomout): "
 _POSITIVE = FloatRange(0, lo_open=True)
 _POSITIVE_OR_NONE = FloatRange(0, lo_open=True, none=True)
 
+#: FAQ's objective (``matching.seeded``): a row of ``MATCH_PARAMS``, and ``evaluate``'s ``--faq-objective``.
+FAQ_OBJECTIVE = Param("objective", Choice(FAQ_OBJECTIVES), "distance",
+                      "faq: the objective: distance (the distortion of every sample distance, Eq. 3), gaussian "
+                      "(near pairs only), or local (near pairs, the width read off the landmark pairs' distortion; "
+                      "for different species whose landmarks leave the extremities free).", ("faq", None),
+                      ("--faq-objective",))
+
 #: The options of ``match``, each declared once (``params``): the command line's ``shapecond match``
 #: options and ``match``'s keywords are made from it.  Feeds: "match" ``MatchOptions``, "zoomout" its
 #: ``ZoomOutOptions`` (the dense stage; prefixed ``zoomout_`` since ``k`` and ``sigma`` are LH05's),
@@ -79,10 +86,7 @@ MATCH_PARAMS = (
           ("lh05", None)),
     Param("nested", Flag(), True, "lh05: with more than 3 landmarks, also match with the first 3; keep the better.",
           ("lh05", None)),
-    Param("objective", Choice(FAQ_OBJECTIVES), "distance",
-          "faq: the objective: distance (the distortion of every sample distance, Eq. 3), gaussian (near pairs "
-          "only), or local (near pairs, the width read off the landmark pairs' distortion; for different species "
-          "whose landmarks leave the extremities free).", ("faq", None), ("--faq-objective",)),
+    FAQ_OBJECTIVE,
     Param("init", Choice(("descriptor", "barycenter")), "descriptor", "faq: the start.", ("faq", None)),
     Param("sigma", _POSITIVE_OR_NONE, None,
           "faq: kernel width of the gaussian objective [default: from sigma_factor].", ("faq", None)),

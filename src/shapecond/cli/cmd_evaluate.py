@@ -22,6 +22,7 @@ from pathlib import Path
 
 import click
 
+from ..api.matching import FAQ_OBJECTIVE
 from ..errors import InputError
 from ..evaluation import evaluate
 from ..evaluation.report import by_protocol, correlations, protocols, write_report
@@ -29,7 +30,7 @@ from ..evaluation.run import DEFAULT_MATCHERS, DEFAULT_METHODS, PROTOCOL_CHOICES
 from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..parallel import runner
 from .common import (BACKEND_OPTION, NO_CACHE_OPTION, POINTS_OPTION, SEED_OPTION, Command, Int, emit_json,
-                     force_option, info, json_option, progress_enabled)
+                     force_option, info, json_option, param_option, progress_enabled)
 
 
 def _names(text, allowed=None, what="name"):
@@ -65,6 +66,7 @@ def _counts(text) -> list[int]:
               help="Landmark counts matched besides all of the class's landmarks (e.g. 3,6).")
 @click.option("--dense", type=click.Choice(DENSE_STAGES), default="zoomout", show_default=True,
               help="How maps reach every vertex: landmark-anchored ZoomOut, or the plain extensions.")
+@param_option(FAQ_OBJECTIVE, "faq_objective")
 @click.option("--jobs", "-j", type=Int(1, 1024), default=1, show_default=True,
               help="Parallel processes for the per-shape work (joblib; at most one per task and core).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="evaluation",
@@ -113,7 +115,7 @@ def command(dataset_dir, **o):
                       n_points=o["points"], seed=o["seed"], backend=o["geodesic_backend"], cache=not o["no_cache"],
                       progress=progress_enabled(), max_targets=o["max_targets"], protocol=o["protocol"],
                       force=o["force"], error_bars=o["error_bars"], pairs=o["pairs_file"],
-                      n_landmarks=o["landmark_count"], scores=o["scores"])
+                      n_landmarks=o["landmark_count"], scores=o["scores"], faq_objective=o["faq_objective"])
     report = write_report(ev, o["out_dir"])
     summary = {"report": str(report), "seconds": time.perf_counter() - t0,
                "classes": ev.settings["classes"], "matchings": len(ev.records),

@@ -49,6 +49,7 @@ from ..matching.metrics import errors_from_rows, normalise
 from ..matching.error_bar import ErrorBar
 from ..matching.pipeline import SAMPLE_MATCHERS, MatchOptions
 from ..matching.problem import MatchProblem
+from ..matching.seeded import FAQOptions
 from ..matching.sampled import CachedSolver, sample_surface, surface_at, surface_unit
 from ..matching.spectral import fine_kernel
 from ..shapes.geodesics import DistanceSolver
@@ -74,6 +75,7 @@ class MatchingSetup:
     dense : how maps reach every vertex (``matching.pipeline.DENSE_STAGES``).
     shape : ShapeSetup (N, seed, backend, cache).
     error_bars : give every matching its error bar (``matching.error_bar``; a δ search each).
+    faq_objective : FAQ's objective (``matching.seeded``).
     """
 
     counts: tuple
@@ -81,14 +83,16 @@ class MatchingSetup:
     dense: str = "zoomout"
     shape: ShapeSetup = ShapeSetup()
     error_bars: bool = True
+    faq_objective: str = "distance"
 
     def options(self, matcher: str, protocol: str = "independent") -> MatchOptions:
         """The ``MatchOptions`` of ``matcher`` in ``protocol`` (the corresponding protocol's target has the
         source's samples, ``samples="same-ids"``)."""
         s = self.shape
+        faq = FAQOptions(objective=self.faq_objective, seed=s.seed) if matcher == "faq" else None
         return MatchOptions(matcher=matcher, n_points=s.n_points, backend=s.backend, seed=s.seed,
                             dense=self.dense, samples="same-ids" if protocol == "corresponding" else "fps",
-                            cache=s.cache)
+                            cache=s.cache, matcher_options=faq)
 
 
 def target_task(cls: ClassFolder, target_path, landmark_sets: dict, setup: MatchingSetup,

@@ -27,6 +27,7 @@ from ..errors import InputError
 from ..limits import check_cost, geodesic_seconds, search_seconds
 from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..matching.sampled import sample_surface, surface_at
+from ..matching.seeded import FAQ_OBJECTIVES
 from ..parallel import cap_jobs, run_tasks
 from ..shapes.pairs_list import read_pairs
 from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count, pair_groups
@@ -69,6 +70,7 @@ class EvaluationOptions:
         TOSCA classes, ``DEFAULT_LANDMARKS`` otherwise).
     scores : the symmetry scores of every landmark set (Figure 7a: σ and δ after 1, 3 and all
         landmarks, δ at the class's levels); False: the matchings alone (a release's pairs list).
+    faq_objective : FAQ's objective (``matching.seeded.FAQ_OBJECTIVES``).
     """
 
     classes: tuple | None = None
@@ -91,6 +93,7 @@ class EvaluationOptions:
     pairs: tuple | None = None
     n_landmarks: int | None = None
     scores: bool = True
+    faq_objective: str = "distance"
 
     def __post_init__(self):
         if self.protocol not in PROTOCOL_CHOICES:
@@ -100,6 +103,8 @@ class EvaluationOptions:
         bad = [m for m in self.matchers if m not in MATCHERS]
         if bad or not self.matchers:
             raise InputError(f"unknown matcher {bad[0] if bad else ''!r} (choose from {', '.join(MATCHERS)})")
+        if self.faq_objective not in FAQ_OBJECTIVES:
+            raise InputError(f"unknown FAQ objective {self.faq_objective!r} (choose from {', '.join(FAQ_OBJECTIVES)})")
         if self.dense not in DENSE_STAGES:
             raise InputError(f"unknown dense stage {self.dense!r} (choose from {', '.join(DENSE_STAGES)})")
         if not all(isinstance(c, int) and c >= 1 for c in self.counts):
@@ -237,7 +242,7 @@ def _matching_phase(plan: dict, landmarks: list, opts: EvaluationOptions):
             tasks.append((class_scale_task, (p.name, p.folder.null, p.targets, sets, setup), {}))
         sets = {d["method"]: d["vertices"] for d in done}
         counts = tuple(sorted({min(c, p.k) for c in opts.counts} | {p.k}))
-        ms = MatchingSetup(counts, tuple(opts.matchers), opts.dense, setup, opts.error_bars)
+        ms = MatchingSetup(counts, tuple(opts.matchers), opts.dense, setup, opts.error_bars, opts.faq_objective)
         tasks += [(target_task, (p.folder, t, {m: sets[m] for m in opts.methods}, ms), dict(protocol=prot))
                   for t in p.targets for prot in p.protocols]
     records, eps, by_set = [], {}, {(d["cls"], d["method"]): d for d in landmarks}
@@ -343,8 +348,8 @@ def evaluate(dataset_dir, **options) -> Evaluation:
         ``datasets``), or one such class.
     **options : fields of ``EvaluationOptions`` (classes, methods, matchers, protocol, counts,
         n_points, seed, backend, cache, dense, n_jobs, scheduler, quick, max_targets, progress,
-        force, error_bars, pairs (a pairs file or a list of name pairs), n_landmarks); an unknown name
-        is refused before any work.
+        force, error_bars, pairs (a pairs file or a list of name pairs), n_landmarks, scores,
+        faq_objective); an unknown name is refused before any work.
 
     Returns
     -------
