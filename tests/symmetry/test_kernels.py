@@ -101,3 +101,33 @@ def test_local_search_leaves_g_alone_and_stops_above_stop():
                                       K.MapState(t, G, H, used, np.zeros(0), obj.d2(D, t), obj.dist2(D, t)))
     assert np.array_equal(G, G0)  # read, never written
     assert moves >= 1 and d2 / dist2 > start * 1.0001
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 10**6), n=st.integers(4, 9), extra=st.integers(0, 6), n_lm=st.integers(1, 3))
+def test_row_floors_bound_the_anchor_rows_after_every_move(seed, n, extra, n_lm):
+    # the scan skips a candidate on these bounds: they must never exceed the rows' true excess
+    m = n + extra
+    D, rng = _instance(seed, n, m)
+    lm = np.sort(rng.choice(n, size=n_lm, replace=False)).astype(np.int64)
+    free = np.setdiff1d(np.arange(n), lm).astype(np.int64)
+    t = np.arange(n, dtype=np.int64)
+    t[free] = rng.choice(np.setdiff1d(np.arange(m), lm), size=free.size, replace=False)
+    rl = obj.anchor_rows(D, t, lm)
+    lb = float(rng.uniform(0.0, 1.0) * rl.mean())
+    ea, eslack = np.empty((lm.size, n)), np.empty(lm.size)
+    K._row_terms(D, n, t, lm, rl, lb, ea, eslack)
+    scale = float(np.sum(np.abs(rl) + lb))
+    used = set(t.tolist())
+    for a in free:
+        excess = []
+        for b in free[free != a]:
+            u = t.copy()
+            u[a], u[b] = t[b], t[a]
+            excess.append(np.maximum(obj.anchor_rows(D, u, lm) - lb, 0.0).sum())
+            assert K._pair_floor(ea, rl, lb, a, b, scale) <= excess[-1]
+        for y in set(range(m)) - used:
+            u = t.copy()
+            u[a] = y
+            excess.append(np.maximum(obj.anchor_rows(D, u, lm) - lb, 0.0).sum())
+        assert all(K._row_floor(ea, eslack, a, scale) <= e for e in excess)

@@ -192,3 +192,31 @@ def test_the_same_result_with_one_thread_and_with_two(budget):
     finally:
         numba.set_num_threads(before)
     assert out[0] == out[1]
+
+
+def test_budget_search_does_not_polish_starts_far_off_a_landmark_row(monkeypatch):
+    # HOPELESS_START: a start whose landmark row is far above its budget is dropped, one within it is polished
+    import shapecond.symmetry.search as S
+
+    rng = np.random.default_rng(3)
+    pts = rng.normal(size=(40, 3))
+    D = np.sqrt(((pts[:, None] - pts[None]) ** 2).sum(-1))
+    n, lm = 40, [0]
+    far = np.arange(n)
+    far[1:] = np.roll(np.arange(1, n), 7)  # moves every other sample: row 0 far off
+    near = np.arange(n)
+    b = 2 + int(np.argmin(D[1, 2:]))  # swap sample 1 with its nearest neighbour
+    near[[1, b]] = [b, 1]
+    budget = 1.5 * max(obj.dist2(D, near), obj.anchor_rows(D, near, lm)[0] * n)
+    assert obj.anchor_rows(D, far, lm)[0] > S.HOPELESS_START * budget / n
+    polished = []
+    orig = S.SearchStage.polished
+
+    def spy(self, ts, *args, **kw):
+        polished.extend(np.asarray(t).tobytes() for t in ts)
+        return orig(self, ts, *args, **kw)
+
+    monkeypatch.setattr(S.SearchStage, "polished", spy)
+    witness_search(D, n_samples=n, landmarks=lm, starts=[far, near], effort="quick", budget=budget)
+    assert near.astype(np.int64).tobytes() in polished
+    assert far.astype(np.int64).tobytes() not in polished
