@@ -73,7 +73,9 @@ KEEP = 5
 #: sqrt(HOPELESS_START) = 10 times the RMS budget (an anchor row above HOPELESS_START · budget / N)
 #: is not polished.  On TOSCA cat0 (N = 400, 1-5 landmarks) every such start (the ladder's rungs,
 #: the second reflection, a Gilmore-Lawler start: rows 110-190x) ended infeasible after up to 1,000
-#: moves, half the time of a search; starts at 4-13x ended feasible, the best map among them.
+#: moves, half the time of a search; starts at 4-13x ended feasible, the best map among them.  Checked
+#: on a shape it was not chosen on (SMAL_r hippo5, CNBS-scale -k 6): the same landmarks and δ.  While the
+#: pool is empty the least far start is kept (a search on a shape matched to itself had none left).
 HOPELESS_START = 100.0
 
 
@@ -389,10 +391,13 @@ class _SearchRun:
     def run_all(self, stage, ts):
         """Polish every start of ``ts`` (``SearchStage.polished``), adding the results in order
         until ``late()``: the same pool as polishing them one after the other.  With a budget,
-        starts far off a landmark row's budget are dropped (``HOPELESS_START``)."""
-        if self.budget is not None and self.lm.size:
+        starts far off a landmark row's budget are dropped (``HOPELESS_START``), except the least far
+        one while the pool holds no map (the kicks and the result need one)."""
+        if self.budget is not None and self.lm.size and len(ts):
+            far = [float(np.max(obj.anchor_rows(self.D, t, self.lm))) for t in ts]
             cap = HOPELESS_START * self.budget / self.n
-            ts = [t for t in ts if np.max(obj.anchor_rows(self.D, t, self.lm)) <= cap]
+            kept = [t for t, f in zip(ts, far) if f <= cap]
+            ts = kept if kept or self.pool.items else [ts[int(np.argmin(far))]]
         done = stage.polished(ts, self.mode, self.s, self.lm)
         while not self.late():
             item = next(done, None)
