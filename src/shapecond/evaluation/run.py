@@ -27,7 +27,7 @@ from ..errors import InputError
 from ..limits import check_cost, geodesic_seconds, search_seconds
 from ..matching.pipeline import DENSE_STAGES, MATCHERS
 from ..matching.sampled import sample_surface, surface_at
-from ..matching.seeded import FAQ_OBJECTIVES
+from ..matching.seeded import FAQOptions
 from ..parallel import cap_jobs, run_tasks
 from ..shapes.pairs_list import read_pairs
 from .datasets import ClassFolder, check_layout, find_classes, off_vertex_count, pair_groups
@@ -70,7 +70,7 @@ class EvaluationOptions:
         TOSCA classes, ``DEFAULT_LANDMARKS`` otherwise).
     scores : the symmetry scores of every landmark set (Figure 7a: σ and δ after 1, 3 and all
         landmarks, δ at the class's levels); False: the matchings alone (a release's pairs list).
-    faq_objective : FAQ's objective (``matching.seeded.FAQ_OBJECTIVES``).
+    faq_objective : FAQ's objective (``matching.seeded.FAQ_OBJECTIVES``), checked by ``FAQOptions``.
     """
 
     classes: tuple | None = None
@@ -103,8 +103,7 @@ class EvaluationOptions:
         bad = [m for m in self.matchers if m not in MATCHERS]
         if bad or not self.matchers:
             raise InputError(f"unknown matcher {bad[0] if bad else ''!r} (choose from {', '.join(MATCHERS)})")
-        if self.faq_objective not in FAQ_OBJECTIVES:
-            raise InputError(f"unknown FAQ objective {self.faq_objective!r} (choose from {', '.join(FAQ_OBJECTIVES)})")
+        FAQOptions(objective=self.faq_objective)  # its one check of the name
         if self.dense not in DENSE_STAGES:
             raise InputError(f"unknown dense stage {self.dense!r} (choose from {', '.join(DENSE_STAGES)})")
         if not all(isinstance(c, int) and c >= 1 for c in self.counts):
