@@ -122,6 +122,20 @@ def test_results_serialise_to_json_and_print_readably(tmp_path):
     assert "SymmetryProblem(animal, N=20" in repr(problem)
 
 
+def test_the_pictures_take_their_style_by_name():
+    """A landmark picture names its options (``up``, ``title``, ``dpi``...); a field picture (the local score's
+    doubt, a match's) checks its style against ``viz.render.Look`` and the colouring, in one line."""
+    from matplotlib.figure import Figure
+
+    marks = sc.landmarks(NON_SYMMETRIC_8, 2, "fps")
+    fig = marks.plot(title="two by FPS", views=((20, 30),), dpi=50)
+    assert isinstance(fig, Figure) and fig._suptitle.get_text() == "two by FPS" and len(fig.axes) == 1
+    local = sc.local_score("demo:sphere:subdivisions=1")
+    assert len(local.plot(views=((0, 0), (90, 0)), cmap="magma", vmax=2.0).axes) >= 2
+    with pytest.raises(InputError, match=r"plot\(\) got an unknown option 'colour' \(its options: .*cmap"):
+        local.plot(colour="red")
+
+
 def test_symmetry_problem_reuses_its_searches_and_agrees_with_the_one_off_functions():
     shape = "demo:animal:delta=0.1,resolution=0.06"
     problem = sc.SymmetryProblem(shape, 30, target="samples", cache=False)
