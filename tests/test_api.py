@@ -122,6 +122,20 @@ def test_results_serialise_to_json_and_print_readably(tmp_path):
     assert "SymmetryProblem(animal, N=20" in repr(problem)
 
 
+def test_the_pictures_take_their_style_by_name():
+    """A landmark picture names its options (``up``, ``title``, ``dpi``...); a field picture (the local score's
+    doubt, a match's) checks its style against ``viz.render.Look`` and the colouring, in one line."""
+    from matplotlib.figure import Figure
+
+    marks = sc.landmarks(NON_SYMMETRIC_8, 2, "fps")
+    fig = marks.plot(title="two by FPS", views=((20, 30),), dpi=50)
+    assert isinstance(fig, Figure) and fig._suptitle.get_text() == "two by FPS" and len(fig.axes) == 1
+    local = sc.local_score("demo:sphere:subdivisions=1")
+    assert len(local.plot(views=((0, 0), (90, 0)), cmap="magma", vmax=2.0).axes) >= 2
+    with pytest.raises(InputError, match=r"plot\(\) got an unknown option 'colour' \(its options: .*cmap"):
+        local.plot(colour="red")
+
+
 def test_symmetry_problem_reuses_its_searches_and_agrees_with_the_one_off_functions():
     shape = "demo:animal:delta=0.1,resolution=0.06"
     problem = sc.SymmetryProblem(shape, 30, target="samples", cache=False)
@@ -208,13 +222,22 @@ G = "demo:sphere:subdivisions=1"
     (lambda: sc.landmarks(G, 2, "fps", 8, cache=False, resolve_fraction=0.2),
      "unknown option 'resolve_fraction' for method 'fps'"),
     (lambda: sc.landmarks(G, 2, "hks", 8, cache=False, alpha=1.0), "unknown option 'alpha' for method 'hks'"),
-    (lambda: sc.heatmap(G, n_points=8, cache=False, resolve_fractio=0.2), "argument 'resolve_fractio'"),
+    (lambda: sc.heatmap(G, n_points=8, cache=False, resolve_fractio=0.2),
+     "heatmap() got unknown option 'resolve_fractio' (did you mean 'resolve_fraction'?)"),
+    (lambda: sc.heatmap(G, n_points=8, cach=False), "heatmap() got unknown option 'cach' (did you mean 'cache'?)"),
+    (lambda: sc.kappa(G, trial=3), "kappa() got unknown option 'trial' (did you mean 'trials'?)"),
+    (lambda: sc.kappa(G, scale=20), "scale must be a finite number in (0, 10], got 20"),
+    (lambda: sc.metric_shape(G, 8, taget="samples"),
+     "metric_shape() got unknown option 'taget' (did you mean 'target'?)"),
+    (lambda: sc.SymmetryProblem(G, 8, efort="quick"),
+     "SymmetryProblem() got unknown option 'efort' (did you mean 'effort'?)"),
     (lambda: sc.score(G, 8, exact="yes", cache=False), "exact must be 'auto', True or False"),
     (lambda: sc.deformation_level(G, G, n_points=8, error_bar=False), "unknown option 'error_bar'"),
     (lambda: sc.deformation_level(G, [G], n_points=8, refin=False), "unknown option 'refin'"),
     (lambda: sc.deformation_level(G, G, matcher="zoomout"), "not 'zoomout'"),
     (lambda: sc.deformation_level(G, [G, G], landmarks=[0], landmarks_others=[[0]]), "2 other shapes"),
 ], ids=["match refin", "faq k", "landmarks methd", "fps resolve_fraction", "hks alpha", "heatmap resolve_fractio",
+        "heatmap cach", "kappa trial", "kappa scale=20", "metric_shape taget", "SymmetryProblem efort",
         "score exact=yes", "level error_bar", "level refin", "level zoomout", "level landmark lists"])
 def test_unknown_keywords_are_one_input_error_before_any_work(monkeypatch, call, needle):
     """They raised TypeError (or a plain ValueError) after the geodesics had been computed."""
@@ -246,6 +269,25 @@ def test_a_symmetry_problem_refuses_the_score_settings_sc_score_refuses(bad, nee
     with pytest.raises(InputError) as kept:
         problem.score(**bad)
     assert str(kept.value) == str(one_off.value) and "0 searches kept" in repr(problem)  # before any work
+
+
+@pytest.mark.parametrize("call,needle", [
+    (lambda p: p.heatmap(resolve_fraction=2), "resolve_fraction must be a finite number in [0, 1], got 2"),
+    (lambda p: p.heatmap(score="delta"), "score must be one of"),
+    (lambda p: p.landmarks(2, scors=True),
+     "SymmetryProblem.landmarks() got unknown option 'scors' for method 'cnbs' (did you mean 'scores'?)"),
+    (lambda p: p.landmarks(2, "fps", resolve_fraction=0.2), "unknown option 'resolve_fraction' for method 'fps'"),
+    (lambda p: p.landmarks(2, effort="quick"), "unknown option 'effort' for method 'cnbs'"),  # the problem's
+    (lambda p: p.landmarks(2, "fps", scores="yes"), "scores must be True or False"),
+    (lambda p: p.landmarks(-1, "fps"), "k must be an integer in [0, 100000], got -1"),
+], ids=["resolve_fraction=2", "score=delta", "scors", "fps resolve_fraction", "effort", "scores=yes", "k=-1"])
+def test_a_symmetry_problem_checks_its_methods_options_by_the_table_rows(call, needle):
+    """Its heat map and landmarks check their keywords by the rows of ``heatmap``'s and ``landmarks``'s tables
+    (``resolve_fraction``, ``score``, ``scores``, ``k``...), a misspelt one named with the nearest."""
+    problem = sc.SymmetryProblem(NON_SYMMETRIC_8)
+    with pytest.raises(InputError, match=re.escape(needle)):
+        call(problem)
+    assert "0 searches kept" in repr(problem)  # before any work
 
 
 def test_the_zoomout_dense_stage_is_in_the_estimate_before_any_work(monkeypatch):

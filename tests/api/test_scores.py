@@ -1,4 +1,6 @@
-"""The parameter tables of ``score`` and ``landmarks`` (``api.scores.SCORE_PARAMS``, ``LANDMARK_PARAMS``): every
+"""The parameter tables of ``score``, ``landmarks``, ``heatmap``, ``kappa`` and ``metric_shape``
+(``api.scores.SCORE_PARAMS``, ``LANDMARK_PARAMS``, ``HEATMAP_PARAMS``, ``KAPPA_PARAMS``,
+``api.inputs.METRIC_SHAPE_PARAMS``; the command ``sample`` is ``metric_shape``'s): every
 bad value of a row is refused by the Python function and the command alike, naming the parameter, before any
 work; the commands' options and defaults are the table's; the options several functions share are one ``Param``."""
 
@@ -13,8 +15,12 @@ from shapecond.api.matching import MATCH_PARAMS
 from shapecond.api.options import ShapeOptions
 from shapecond.api.params import (BACKEND, CACHE, EFFORT, FORCE, LARGEST_COMPONENT, POINTS, SEED, SHAPE_PARAMS,
                                   REQUIRED, Ids, cli_key)
-from shapecond.api.scores import LANDMARK_PARAMS, SCORE_PARAMS
+from shapecond.api.inputs import METRIC_SHAPE_PARAMS
+from shapecond.api.scores import HEATMAP_PARAMS, KAPPA_PARAMS, LANDMARK_PARAMS, SCORE_PARAMS
+from shapecond.cli.cmd_heatmap import command as heatmap_command
+from shapecond.cli.cmd_kappa import command as kappa_command
 from shapecond.cli.cmd_landmarks import command as landmarks_command
+from shapecond.cli.cmd_sample import command as sample_command
 from shapecond.cli.cmd_score import command as score_command
 from shapecond.errors import InputError
 
@@ -25,7 +31,11 @@ MISSING = "no/such/shape.off"  # a check after loading would say "no such file"
 #: Per table: the Python function, its other arguments, its command and the command's other words.
 TABLES = {"score": (SCORE_PARAMS, sc.score, {}, score_command, ["score", MISSING, "--no-cache"]),
           "landmarks": (LANDMARK_PARAMS, sc.landmarks, {"k": 2, "method": "fps"}, landmarks_command,
-                        ["landmarks", MISSING, "-k", "2", "--method", "fps", "--no-cache"])}
+                        ["landmarks", MISSING, "-k", "2", "--method", "fps", "--no-cache"]),
+          "heatmap": (HEATMAP_PARAMS, sc.heatmap, {}, heatmap_command, ["heatmap", MISSING, "--png", "OUT.png"]),
+          "kappa": (KAPPA_PARAMS, sc.kappa, {}, kappa_command, ["kappa", MISSING]),
+          "metric_shape": (METRIC_SHAPE_PARAMS, sc.metric_shape, {}, sample_command,
+                           ["sample", MISSING, "-o", "OUT.npz"])}
 CASES = [(name, *case) for name in TABLES for case in table_cases(TABLES[name][0], cli=False)]
 CLI_CASES = [(name, *case) for name in TABLES for case in table_cases(TABLES[name][0], cli=True)]
 
@@ -79,7 +89,8 @@ def test_the_command_s_options_and_defaults_are_the_table_s(name):
             assert p.check(o.default, p.name) == p.check(p.default, p.name) == []
         else:
             assert o.default == p.default and type(o.default) is type(p.default), p.name
-    assert set(options) <= {"epsilon_from", "witness_png", "scale_witness_png", "html", "png", "ply", "up", "as_json"}
+    assert set(options) <= {"epsilon_from", "witness_png", "scale_witness_png", "html", "png", "ply", "up", "output",
+                            "as_json"}
 
 
 def test_the_flags_give_the_python_values(capsys, monkeypatch):
@@ -130,13 +141,14 @@ def test_the_shape_rows_are_the_shape_options_fields():
 def test_the_shared_options_are_one_param_in_every_table():
     """``seed``, ``backend``, ... are the same object in match's, score's and landmarks' tables; ``n_points`` is
     ``POINTS`` everywhere, with match's own default (it always samples 400)."""
-    for table in (MATCH_PARAMS, SCORE_PARAMS, LANDMARK_PARAMS):
+    for table in (MATCH_PARAMS, SCORE_PARAMS, LANDMARK_PARAMS, HEATMAP_PARAMS, KAPPA_PARAMS, METRIC_SHAPE_PARAMS):
         rows = {p.name: p for p in table}
         for shared in (SEED, BACKEND, CACHE, LARGEST_COMPONENT, FORCE):
             assert rows[shared.name] is shared
         assert rows["n_points"] is POINTS or rows["n_points"] == POINTS.with_default(400)
-    for table in (SCORE_PARAMS, LANDMARK_PARAMS):
-        assert all(p in table for p in SHAPE_PARAMS) and EFFORT in table and POINTS in table
+    for table in (SCORE_PARAMS, LANDMARK_PARAMS, HEATMAP_PARAMS, KAPPA_PARAMS, METRIC_SHAPE_PARAMS):
+        assert all(p in table for p in SHAPE_PARAMS) and POINTS in table
+    assert all(EFFORT in table for table in (SCORE_PARAMS, LANDMARK_PARAMS, HEATMAP_PARAMS))
 
 
 def test_the_older_commands_name_the_shared_options_as_before():

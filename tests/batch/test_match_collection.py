@@ -216,6 +216,23 @@ def test_match_collection_api(collection, tmp_path):
         sc.match_collection(root / "template.off", [root / "s1.off", tmp_path / "s1.off"])
 
 
+def test_match_collection_refuses_a_bad_match_option_before_any_work(collection, monkeypatch):
+    """A misspelt keyword of ``match`` was each shape's row error, after the template had been loaded; it is
+    refused once, naming the nearest, before anything is read."""
+    from shapecond.api import collection as api_collection
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("a shape was loaded before the options were checked")
+
+    monkeypatch.setattr(api_collection, "load", no_work)
+    root, _ = collection
+    with pytest.raises(InputError, match=r"match_collection\(\) got unknown option 'n_point' for matcher 'lh05' "
+                                         r"\(did you mean 'n_points'\?\)"):
+        sc.match_collection(root / "template.off", [root / "s1.off"], n_point=30)
+    with pytest.raises(InputError, match="suggest must be an integer"):
+        sc.match_collection(root / "template.off", [root / "s1.off"], suggest=-1)
+
+
 def test_a_landmark_table_through_the_command_line(collection, tmp_path, capsys):
     root, _ = collection
     table = tmp_path / "landmarks.csv"

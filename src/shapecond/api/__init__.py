@@ -2,7 +2,7 @@
 
 The command line, batch scoring and the evaluation call these functions; none
 of them turns an input into a shape or a result on its own, so the validation
-(``options``), the cost guards (``guards``) and the numbers are the same from
+(``params``: each option declared once), the cost guards (``guards``) and the numbers are the same from
 every door.
 
 * ``inputs``: ``load`` (a path, ``"demo:NAME"``, trimesh object, ``(V, F)``,
@@ -11,7 +11,8 @@ every door.
 * ``scores``: ``score`` (σ bracket, Eq. 5; κ bracket, Theorem 4.1; δ(ε);
   verdict), ``local_score`` (Section 5), ``landmarks`` (CNBS and baselines,
   Section 6), ``heatmap`` (Figures 1 and 4), ``kappa`` (probes of Eq. 4); the
-  tables ``SCORE_PARAMS`` and ``LANDMARK_PARAMS`` of ``score``'s and ``landmarks``'s options;
+  tables ``SCORE_PARAMS``, ``LANDMARK_PARAMS``, ``HEATMAP_PARAMS`` and ``KAPPA_PARAMS`` of their options
+  (``inputs.METRIC_SHAPE_PARAMS``: ``metric_shape``'s, ``problem.PROBLEM_PARAMS``: ``SymmetryProblem``'s);
 * ``problem``: ``SymmetryProblem``, one shape whose searches are kept for
   repeated queries;
 * ``settings``: ``score_settings``, the checked settings of both kinds of score;

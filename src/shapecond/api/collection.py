@@ -40,7 +40,8 @@ from ..shapes.landmark_files import check_in_range, landmarks_of, pair_by_label,
 from ..shapes.pairs_list import read_pairs
 from ..matching.sampled import sample_surface
 from .inputs import load
-from .matching import match
+from .matching import MatchSettings, checked_match
+from .matching import match_options as checked_keywords  # match_collection's **match_options are the keywords
 from .params import DEFAULT_POINTS
 
 #: Direction of every map of a collection.
@@ -160,17 +161,17 @@ def label_pairs(reference_lm: dict, shape_lm: tuple | None, reference: str = "th
     return labels, ids_r, ids_s
 
 
-def _match_fields(template, shape, template_lm: dict, shape_lm: tuple | None, reverse: bool, match_options,
-                  view: bool = False):
+def _match_fields(template, shape, template_lm: dict, shape_lm: tuple | None, settings: MatchSettings,
+                  reverse: bool, view: bool, reference: str):
     """(the row's match fields, the ``MatchResult``) of one direction (``match_to_template``); with ``view``,
     the fields hold the map's compact view under ``"_view"``."""
-    labels, ids_t, ids_s = label_pairs(template_lm, shape_lm, match_options.pop("reference", "the template"))
-    flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
-    loaded = load(shape, **flags)
+    labels, ids_t, ids_s = label_pairs(template_lm, shape_lm, reference)
+    flags = settings.flags
+    loaded = load(shape, largest_component=flags["largest_component"], force=flags["force"])
     if hasattr(loaded, "ids"):
         check_in_range(ids_s, int(loaded.ids.max()) + 1, shape_lm[1])
     pair = (loaded, template, ids_s, ids_t) if reverse else (template, loaded, ids_t, ids_s)
-    result = match(*pair, **{"suggest": 1, **match_options})
+    result = checked_match(*pair, settings)
     bar = result.summary.get("error_bar") or {}
     first = (result.summary.get("suggestions") or [{}])[0]
     fields = {"landmark_pairs": len(labels), "landmark_labels": " ".join(labels), "bar": bar.get("bar"),
@@ -184,8 +185,14 @@ def _match_fields(template, shape, template_lm: dict, shape_lm: tuple | None, re
     return fields, result
 
 
-def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None, *, reverse: bool = False,
-                      view: bool = False, **match_options):
+def collection_settings(keywords: dict, caller: str = "match_collection") -> MatchSettings:
+    """The keywords of ``match`` for every map of a collection, checked once before any work
+    (``matching.match_options``); ``suggest`` defaults to 1 (each row names the next landmark)."""
+    return checked_keywords({"suggest": 1, **keywords}, caller)
+
+
+def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None, settings: MatchSettings, *,
+                      reverse: bool = False, view: bool = False, reference: str = "the template"):
     """(the row's match fields, the map) of ``shape`` matched from ``template`` (module docstring).
 
     Parameters
@@ -195,11 +202,12 @@ def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None
     template_lm : the template's ``{label: vertex id}``.
     shape_lm : the shape's (``{label: vertex id}``, where they were read), as ``landmarks_of`` gives them;
         None when it has none.
+    settings : the keywords of ``match``, checked (``collection_settings``: ``matcher``, ``n_points``,
+        ``seed``...; ``suggest`` 1 unless told otherwise).
     reverse : match the shape to the template instead (``REVERSE``; the suggestion is then a shape vertex).
     view : also compute the map's compact view (``viz.mapview.map_view``: its target drawn coarsely with the
         transfer colours and the error bar's doubt), returned in the fields under ``"_view"`` (not a column).
-    **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``seed``...); ``suggest`` defaults to 1;
-        ``reference`` names the template in messages (default "the template").
+    reference : how messages name the template.
 
     Returns
     -------
@@ -208,7 +216,7 @@ def match_to_template(template, shape, template_lm: dict, shape_lm: tuple | None
     or shape id -> template id with ``reverse``).  ``InputError`` for a shape without landmarks, with fewer
     than ``MIN_PAIRS`` shared labels, or with an id out of range.
     """
-    fields, result = _match_fields(template, shape, template_lm, shape_lm, reverse, dict(match_options), view)
+    fields, result = _match_fields(template, shape, template_lm, shape_lm, settings, reverse, view, reference)
     return fields, result.map
 
 
@@ -246,29 +254,30 @@ def cycle_error(geometry, there, back, landmarks=(), *, n_points: int = DEFAULT_
     return float(rows.mean() / surf.unit)
 
 
-def _cycle(result, back, match_options) -> float | None:
-    """``cycle_error`` of a ``MatchResult`` followed by the map ``back``, on the samples ``match`` used."""
-    keys = {"n_points": DEFAULT_POINTS, "backend": "heat", "seed": 0, "cache": True}
+def _cycle(result, back, opts) -> float | None:
+    """``cycle_error`` of a ``MatchResult`` followed by the map ``back``, on the samples ``match`` used
+    (``opts``: its ``MatchOptions``)."""
     source, _, landmarks, _ = result.drawing
-    return cycle_error(source, result.map, back, landmarks, **{k: match_options.get(k, v) for k, v in keys.items()})
+    return cycle_error(source, result.map, back, landmarks, n_points=opts.n_points, backend=opts.backend,
+                       seed=opts.seed, cache=opts.cache)
 
 
-def match_both_ways(template, shape, template_lm: dict, shape_lm: tuple | None, *, view: bool = False,
-                    **match_options):
+def match_both_ways(template, shape, template_lm: dict, shape_lm: tuple | None, settings: MatchSettings, *,
+                    view: bool = False, reference: str = "the template"):
     """[(fields, map) template -> shape, (fields, map | None) shape -> template], each with ``cycle_error``.
 
-    ``match_to_template`` in both directions (``view`` as there, for each map); ``InputError`` as it when the
-    first direction fails.  When only the second fails, its fields are ``{"error": the one-line message}``
-    and both cycle errors None.
+    ``match_to_template`` in both directions (``settings``, ``view`` and ``reference`` as there, for each map);
+    ``InputError`` as it when the first direction fails.  When only the second fails, its fields are
+    ``{"error": the one-line message}`` and both cycle errors None.
     """
-    fields, result = _match_fields(template, shape, template_lm, shape_lm, False, dict(match_options), view)
+    fields, result = _match_fields(template, shape, template_lm, shape_lm, settings, False, view, reference)
     try:
-        back_fields, back = _match_fields(template, shape, template_lm, shape_lm, True, dict(match_options), view)
+        back_fields, back = _match_fields(template, shape, template_lm, shape_lm, settings, True, view, reference)
     except ShapecondError as exc:
         return [({**fields, "cycle_error": None}, result.map), ({"error": _one_line(exc)}, None)]
-    options = {k: v for k, v in match_options.items() if k != "reference"}
-    return [({**fields, "cycle_error": _cycle(result, back.map, options)}, result.map),
-            ({**back_fields, "cycle_error": _cycle(back, result.map, options)}, back.map)]
+    opts = settings.options
+    return [({**fields, "cycle_error": _cycle(result, back.map, opts)}, result.map),
+            ({**back_fields, "cycle_error": _cycle(back, result.map, opts)}, back.map)]
 
 
 def _one_line(exc) -> str:
@@ -329,7 +338,7 @@ def reverse_name(name: str) -> str:
     return f"{name}.to_template"
 
 
-def _shape_rows(reference, shape, heads: list[dict], found, match_options) -> list[tuple[dict, object]]:
+def _shape_rows(reference, shape, heads: list[dict], found, settings: MatchSettings) -> list[tuple[dict, object]]:
     """[(row, map or None)] of one task of ``match_collection``: ``reference`` (a loaded shape, its ``{label:
     vertex id}``, how messages name it; or the exception that made it unusable) matched to ``shape``, one
     direction or both (one head each)."""
@@ -341,9 +350,8 @@ def _shape_rows(reference, shape, heads: list[dict], found, match_options) -> li
             raise found or InputError("no landmarks for this shape (no NAME.lmk beside it and no rows in the "
                                       "landmark table)")
         loaded, reference_lm, words = reference
-        options = {**match_options, "reference": words}
-        done = (match_both_ways(loaded, shape, reference_lm, found, **options) if len(heads) == 2
-                else [match_to_template(loaded, shape, reference_lm, found, **options)])
+        done = (match_both_ways(loaded, shape, reference_lm, found, settings, reference=words) if len(heads) == 2
+                else [match_to_template(loaded, shape, reference_lm, found, settings, reference=words)])
     except ShapecondError as exc:
         done = [({"error": _one_line(exc)}, None)] * len(heads)
     seconds = time.perf_counter() - t0
@@ -450,7 +458,8 @@ def match_collection(template, shapes, landmarks=None, *, pairs=None, maps_dir=N
     both_directions : also match each shape to the template (``REVERSE``, its map named
         ``NAME.to_template``, ``reverse_name``), or each pair's second shape to its first, and give both
         maps their ``cycle_error``.
-    **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``dense``, ``seed``...).
+    **match_options : keywords of ``match`` (``matcher``, ``n_points``, ``dense``, ``seed``...; ``suggest``
+        defaults to 1), checked before any work (``collection_settings``).
 
     Returns
     -------
@@ -487,9 +496,10 @@ def match_collection(template, shapes, landmarks=None, *, pairs=None, maps_dir=N
     ['cat.to.template']
     """
     table = _checked_call(template, landmarks, pairs, both_directions)
+    settings = collection_settings(match_options)
     shapes = [str(s) for s in shapes]
     names = dict(zip(shapes, map_names(shapes)))
-    flags = {k: match_options[k] for k in ("largest_component", "force") if k in match_options}
+    flags = {k: settings.flags[k] for k in ("largest_component", "force")}
     tasks = (_template_tasks(template, shapes, names, table, both_directions, flags) if pairs is None
              else _pair_tasks(pairs, shapes, names, table, both_directions, flags))
     tasks = list(tasks)  # every input problem of the call before any work
@@ -497,12 +507,12 @@ def match_collection(template, shapes, landmarks=None, *, pairs=None, maps_dir=N
     for reference, shape, heads in tasks:
         if shape not in found:
             found[shape] = _landmarks_or_error(shape, table)
-        for row, vertex_map in _shape_rows(reference, shape, heads, found[shape], match_options):
+        for row, vertex_map in _shape_rows(reference, shape, heads, found[shape], settings):
             if vertex_map is not None:
                 maps.add(row["map"], vertex_map)
             rows.append(row)
     return _table(rows), maps
 
 
-__all__ = ["ANNOTATE_MORE", "DIRECTION", "PAIR_DIRECTIONS", "REVERSE", "Maps", "cycle_error", "listed_pairs",
-           "match_both_ways", "match_collection", "match_to_template", "pair_map_name", "reverse_name"]
+__all__ = ["ANNOTATE_MORE", "DIRECTION", "PAIR_DIRECTIONS", "REVERSE", "Maps", "collection_settings", "cycle_error",
+           "listed_pairs", "match_both_ways", "match_collection", "match_to_template", "pair_map_name", "reverse_name"]

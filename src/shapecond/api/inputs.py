@@ -29,8 +29,12 @@ from ..shapes.geometry import Geometry
 from ..shapes.io import describe_input, load_input, read_symmetry_map
 from ..shapes.metric import MetricShape, build_metric_shape, from_distance_matrix
 from ..shapes.validate import clean_mesh
-from .options import ShapeOptions, refuse_unknown
-from .params import DEFAULT_POINTS
+from .options import ShapeOptions
+from .params import DEFAULT_POINTS, FIRST_LANDMARKS, POINTS, SHAPE_PARAMS, check_keywords
+
+#: The options of ``metric_shape``, each declared once (``params``): N, the landmarks sampled first and
+#: the shape options (``options.ShapeOptions``).
+METRIC_SHAPE_PARAMS = (POINTS, FIRST_LANDMARKS, *SHAPE_PARAMS)
 
 
 def _from_array(a: np.ndarray, name: str):
@@ -74,7 +78,7 @@ def _loaded(x, largest_component: bool, force: bool):
                      "(V, F), an (n, 3) array or a distance matrix")
 
 
-def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool = False, **unknown):
+def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool = False):
     """The input ``x`` as a validated ``Geometry`` (mesh or point cloud) or distance matrix.
 
     Parameters
@@ -94,7 +98,6 @@ def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool =
     >>> sc.load(np.random.default_rng(0).random((50, 3))).n_vertices
     50
     """
-    refuse_unknown(unknown, "load")
     loaded = _loaded(x, largest_component, force)
     if symmetry_map is not None:
         if not isinstance(loaded, Geometry):
@@ -104,7 +107,7 @@ def load(x, *, largest_component: bool = False, symmetry_map=None, force: bool =
     return loaded
 
 
-def info(x, **unknown) -> dict:
+def info(x) -> dict:
     """What is in the file ``x`` and what is wrong with it (what ``shapecond info --json`` prints).
 
     Keys: input, kind, n_vertices, n_faces, components, boundary_edges,
@@ -117,7 +120,6 @@ def info(x, **unknown) -> dict:
     >>> report["kind"], report["problems"]
     ('mesh', [])
     """
-    refuse_unknown(unknown, "info")
     if not isinstance(x, (str, Path)):
         raise InputError("info() describes a file: give its path (or a demo:NAME specification)")
     return describe_input(str(x))
@@ -135,7 +137,8 @@ def metric_shape(x, n_points: int | None = None, *, landmarks=(), **options) -> 
     **options : the fields of ``ShapeOptions``: ``metric``, ``backend``, ``seed``, ``target``
         ("dense": M = ``target_factor`` x N targets, the default for meshes and clouds;
         "samples": the paper's bijections), ``target_factor``, ``cache``, ``progress``,
-        ``force``, ``largest_component``, ``symmetry_map``.
+        ``force``, ``largest_component``, ``symmetry_map``.  Every keyword, its constraint and
+        default: ``METRIC_SHAPE_PARAMS``; a bad value or an unknown keyword is refused before any work.
 
     Examples
     --------
@@ -144,8 +147,8 @@ def metric_shape(x, n_points: int | None = None, *, landmarks=(), **options) -> 
     >>> shape.n_samples, float(shape.D.max())
     (20, 1.0)
     """
-    opts, _ = ShapeOptions.take(options, "metric_shape")
-    return shape_of(x, n_points, landmarks, opts)
+    v = check_keywords(METRIC_SHAPE_PARAMS, dict(options, n_points=n_points, landmarks=landmarks), "metric_shape")
+    return shape_of(x, v["n_points"], v["landmarks"], ShapeOptions.of(v))
 
 
 def shape_of(x, n_points, landmarks, opts: ShapeOptions) -> MetricShape:
@@ -184,4 +187,4 @@ def require_mesh(g):
     return g
 
 
-__all__ = ["info", "load", "metric_shape", "refuse_unknown", "require_mesh", "shape_of"]
+__all__ = ["METRIC_SHAPE_PARAMS", "info", "load", "metric_shape", "require_mesh", "shape_of"]

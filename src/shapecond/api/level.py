@@ -115,9 +115,10 @@ def deformation_level(x, others, *, landmarks=(), landmarks_others=None, matcher
                    for y, lm in zip(others, lms)], matcher, time.perf_counter() - t0)
 
 
-def collection_level(shapes: list, **options) -> DeformationLevel:
+def collection_level(shapes: list, *, n_points: int = DEFAULT_POINTS, seed: int = 0, backend: str = "heat",
+                     cache: bool = True, force: bool = False, largest_component: bool = False) -> DeformationLevel:
     """The level of a collection: its first readable shape against the next ``COLLECTION_PAIRS`` readable
-    ones (``deformation_level``, in diameters of the first; ``**options`` as there).
+    ones (``deformation_level`` with its default matcher, in diameters of the first; the keywords as there).
 
     A class level needs a few pairs, not all of them: each pair reads the same kind of pose change
     from below, and the median of a few discards a pair whose map went wrong (which reads the level
@@ -130,8 +131,7 @@ def collection_level(shapes: list, **options) -> DeformationLevel:
         if len(readable) > COLLECTION_PAIRS:
             break
         try:
-            shape = load(x, largest_component=options.get("largest_component", False),
-                         force=options.get("force", False))
+            shape = load(x, largest_component=largest_component, force=force)
             if isinstance(shape, np.ndarray):
                 raise InputError("a distance matrix, not a mesh or point cloud")
         except InputError as exc:
@@ -140,7 +140,8 @@ def collection_level(shapes: list, **options) -> DeformationLevel:
         readable.append(shape)
     if len(readable) < 2:
         raise InputError("the level of a collection needs at least two readable shapes")
-    return deformation_level(readable[0], readable[1:], **options)
+    return deformation_level(readable[0], readable[1:], n_points=n_points, seed=seed, backend=backend, cache=cache,
+                             force=force, largest_component=largest_component)
 
 
 def _pair_level(x, y, ids_s, ids_t, opts, flags) -> tuple[float, float]:

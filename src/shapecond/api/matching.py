@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..checks import parse_ids
@@ -106,7 +108,15 @@ def inapplicable(matcher: str) -> list:
     return [m for m in SAMPLE_MATCHERS if m != matcher]
 
 
-def match_options(keywords: dict, caller: str = "match") -> tuple[MatchOptions, dict]:
+class MatchSettings(NamedTuple):
+    """The keywords of ``match`` checked (``match_options``): the ``MatchOptions`` of the matching and the
+    call's own settings ``flags`` (``force``, ``largest_component``, ``error_bar``, ``suggest``)."""
+
+    options: MatchOptions
+    flags: dict
+
+
+def match_options(keywords: dict, caller: str = "match") -> MatchSettings:
     """``MatchOptions`` and the call's settings (``force``, ``largest_component``, ``error_bar``, ``suggest``)
     from the keywords of ``match`` (``MATCH_PARAMS``), each checked once before any work; a keyword of
     no row, or of another matcher's row, refused."""
@@ -118,7 +128,8 @@ def match_options(keywords: dict, caller: str = "match") -> tuple[MatchOptions, 
         raise InputError("suggesting landmarks reads the error bar: it needs error_bar=True")
     own = None if matcher not in _DECLARED else _DECLARED[matcher](
         **groups[matcher], **({"seed": values["seed"]} if matcher == "faq" else {}))  # FAQ is seeded by match's seed
-    return MatchOptions(**groups["match"], zoomout=ZoomOutOptions(**groups["zoomout"]), matcher_options=own), flags
+    return MatchSettings(MatchOptions(**groups["match"], zoomout=ZoomOutOptions(**groups["zoomout"]),
+                                      matcher_options=own), flags)
 
 
 def _match_matrices(src, tgt, ids_s, ids_t, opts, summary) -> MatchResult:
@@ -178,10 +189,17 @@ def match(source, target, landmarks_source, landmarks_target, *, matcher: str = 
     >>> r.map.shape[0] == sc.load(shape).n_vertices
     True
     """
-    opts, flags = match_options(dict(options, matcher=matcher, n_points=n_points, dense=dense))
+    settings = match_options(dict(options, matcher=matcher, n_points=n_points, dense=dense))
+    return checked_match(source, target, landmarks_source, landmarks_target, settings)
+
+
+def checked_match(source, target, landmarks_source, landmarks_target, settings: MatchSettings) -> MatchResult:
+    """``match`` with its keywords checked already (``match_options``): for a caller that checks them once
+    for many matchings (``collection.match_collection``, batch matching)."""
+    opts, flags = settings
     ids_s, ids_t = parse_ids(landmarks_source, "landmarks_source"), parse_ids(landmarks_target, "landmarks_target")
     src, tgt = load_pair(source, target, flags)
-    summary = {"matcher": matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
+    summary = {"matcher": opts.matcher, "n_landmarks": len(ids_s), "direction": "source to target"}
     if isinstance(src, np.ndarray) or isinstance(tgt, np.ndarray):
         return _match_matrices(src, tgt, ids_s, ids_t, opts, summary)
     problem = pair_problem(src, tgt, ids_s, ids_t, opts, flags["force"])
@@ -219,4 +237,4 @@ def pair_problem(src, tgt, ids_s, ids_t, opts: MatchOptions, force: bool) -> Mat
     return problem
 
 
-__all__ = ["match"]
+__all__ = ["MATCH_PARAMS", "MatchSettings", "checked_match", "match", "match_options"]

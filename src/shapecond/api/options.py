@@ -1,33 +1,37 @@
-"""The options of the Python interface, each validated in one place.
+"""The options objects of the Python interface and the rows of the landmark selections' tables.
 
-Every public function of ``shapecond`` takes the options that turn an input
-into a metric shape as keyword arguments (``seed=1, backend="fmm", ...``).
-``ShapeOptions.take`` pops them from a function's ``**options``, checks each
-one (``InputError`` naming the Python parameter) and refuses a keyword that
-the function does not know, so that ``score(x, cach=False)`` fails before any
-work instead of being ignored or failing as a ``TypeError`` after it.
+Every public function of ``shapecond`` that samples a shape takes the options that turn an input into a
+metric shape as keyword arguments (``seed=1, backend="fmm", ...``), checked by its table
+(``params.check_keywords``: one ``InputError`` naming the parameter, an unknown keyword refused with the
+nearest name, before any work); ``ShapeOptions.of`` gathers the checked values into the one object the
+sampling takes.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 
 from ..checks import check_flag
-from ..errors import InputError
-from ..selection import CNBS_EXTRAS, COMMON_OPTIONS, SCORES, LandmarkOptions, check_method_options, own_options_class
+from ..selection import (CNBS_EXTRAS, COMMON_OPTIONS, METHODS, SCORES, LandmarkOptions, check_method_options,
+                         own_options_class)
 from ..shapes.metric import Sampling
-from .params import EFFORT, EPSILON, SHAPE_PARAMS, Choice, Param
+from .params import EFFORT, EPSILON, MAX_POINTS, REQUIRED, SHAPE_PARAMS, Choice, Flag, IntRange, Param
 
+# --- the options of a landmark selection (``scores.landmarks``, ``SymmetryProblem.landmarks``) ---
+#: How many landmarks.
+K = Param("k", IntRange(0, MAX_POINTS), REQUIRED, "Number of landmarks (method user: 0 = all given).", cli=("-k",))
+#: The landmark method (``selection.METHODS``).
+METHOD = Param("method", Choice(METHODS), "cnbs",
+               "cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the scale-aware score "
+               "δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel signature extrema); user "
+               "(--user-landmarks); cnbs-local.", cli=("--method",))
+#: Also score the baselines after each landmark (``selection.LandmarkOptions.scores``).
+SCORES_AFTER = Param("scores", Flag(none=True), None, "Compute the symmetry score after each landmark (always on for "
+                     "cnbs; for the baselines it costs one witness search per landmark).", cli=("--scores/--no-scores",))
 #: Which score follows each landmark (``selection.LandmarkOptions.score``; None: the method's own).
 LANDMARK_SCORE = Param("score", Choice(SCORES, none=True), None,
                        "Score after each landmark: sigma (the paper's) or scale (δ(ε)).", cli=("--score",),
                        cli_default="scale for cnbs-scale, sigma otherwise")
-
-
-def refuse_unknown(options: dict, caller: str) -> None:
-    """``InputError`` when ``options`` (what a function's ``**options`` did not consume) is not empty."""
-    if options:
-        raise InputError(f"{caller}() got an unknown keyword argument {sorted(options)[0]!r}")
 
 
 @dataclass(frozen=True)
@@ -77,18 +81,6 @@ class ShapeOptions:
     def of(cls, values: dict) -> ShapeOptions:
         """The options among ``values`` (a function's keywords checked by its table, ``params.check_keywords``)."""
         return cls(**{p.name: values[p.name] for p in SHAPE_PARAMS})
-
-    @classmethod
-    def take(cls, options: dict, caller: str, others=()) -> tuple[ShapeOptions, dict]:
-        """Split ``options`` into ``ShapeOptions`` and the keywords named in ``others``.
-
-        Any other keyword is refused (``refuse_unknown``) before anything is computed.
-        """
-        names = {f.name for f in fields(cls)}
-        mine = {k: v for k, v in options.items() if k in names}
-        rest = {k: v for k, v in options.items() if k not in names}
-        refuse_unknown({k: v for k, v in rest.items() if k not in others}, caller)
-        return cls(**mine), rest
 
 
 def landmark_options(method: str, seed: int, options: dict) -> tuple[LandmarkOptions, dict]:

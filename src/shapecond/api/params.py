@@ -216,6 +216,12 @@ SHAPE_PARAMS = (METRIC, BACKEND, SEED, LARGEST_COMPONENT, CACHE, TARGET, TARGET_
 #: The shape options of the command line, in its order: ``--points`` and the rows of ``SHAPE_PARAMS`` it has.
 SHAPE_OPTIONS = (POINTS, *[p for p in SHAPE_PARAMS if p.cli])
 EFFORT = Param("effort", Choice(EFFORTS), "default", "Work spent by the witness searches.", cli=("--effort",))
+#: Landmarks every map fixes (``score``, ``kappa``).
+FIXED_LANDMARKS = Param("landmarks", Ids(), (), "Input vertex ids (row indices for a matrix) fixed by every map: "
+                        + IDS_HELP + ".", cli=("--landmarks",))
+#: Landmarks sampled first, to be fixed later (``metric_shape``, ``SymmetryProblem``).
+FIRST_LANDMARKS = Param("landmarks", Ids(), (), "Input vertex ids (row indices for a matrix) placed first among the "
+                        "samples: " + IDS_HELP + ".", cli=("--landmarks",))
 EPSILON = Param("epsilon", FloatRange(0, none=True), None, "Distortion level ε of δ(ε), RMS, in diameters.",
                 cli=("--epsilon",), cli_default="the median sample spacing")
 
@@ -297,7 +303,7 @@ def from_cli_keys(table, values: dict) -> dict:
     return out
 
 
-__all__ = ["BACKENDS", "CACHE", "Choice", "DEFAULT_POINTS", "EFFORT", "EFFORTS", "EPSILON", "FORCE", "File",
-           "FloatRange", "Flag", "FlagOr", "IDS_HELP", "Ids", "IntRange", "LARGEST_COMPONENT", "MAX_POINTS", "METRIC",
-           "POINTS", "PROGRESS", "Param", "REQUIRED", "SEED", "SHAPE_OPTIONS", "SHAPE_PARAMS", "SYMMETRY_MAP",
+__all__ = ["BACKENDS", "CACHE", "Choice", "DEFAULT_POINTS", "EFFORT", "EFFORTS", "EPSILON", "FIRST_LANDMARKS",
+           "FIXED_LANDMARKS", "FORCE", "File", "FloatRange", "Flag", "FlagOr", "IDS_HELP", "Ids", "IntRange",
+           "LARGEST_COMPONENT", "MAX_POINTS", "METRIC", "POINTS", "PROGRESS", "Param", "REQUIRED", "SEED", "SHAPE_OPTIONS", "SHAPE_PARAMS", "SYMMETRY_MAP",
            "TARGET", "TARGET_FACTOR", "check_keywords", "cli_defaults", "cli_key", "from_cli_keys", "grouped"]

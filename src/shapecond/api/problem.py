@@ -7,18 +7,33 @@ import time
 
 import numpy as np
 
-from ..checks import check_choice, check_float, check_int, check_seed, parse_ids
-from ..selection import select_landmarks
+from ..checks import parse_ids
+from ..selection import method_options, select_landmarks
 from ..selection.cnbs import RESOLVE_FRACTION, HeatMapOptions, heat_map
 from ..symmetry.report import score_report
 from ..symmetry.scale import budget_of, default_epsilon
 from ..symmetry.search import witness_search
 from .guards import guard_heat_map, guard_landmarks
-from .inputs import shape_of
-from .options import ShapeOptions, landmark_options, refuse_unknown
-from .params import EFFORT
+from .inputs import METRIC_SHAPE_PARAMS, shape_of
+from .options import K, LANDMARK_SCORE, METHOD, SCORES_AFTER, ShapeOptions, landmark_options
+from .params import EFFORT, EPSILON, Choice, FloatRange, Ids, Param, check_keywords
 from .results import HeatMapResult, LandmarkResult, ScoreResult, promote
 from .settings import score_settings
+
+#: The options of ``SymmetryProblem``, each declared once (``params``): those of ``metric_shape`` and the
+#: effort of every search.
+PROBLEM_PARAMS = (*METRIC_SHAPE_PARAMS, EFFORT)
+#: The options of a heat map itself (``SymmetryProblem.heatmap``; rows of ``scores.HEATMAP_PARAMS``).
+RESOLVE = Param("resolve_fraction", FloatRange(0, 1, none=True), None,
+                "Share of candidates (those the witness maps move farthest) searched again.",
+                cli=("--resolve-fraction",), cli_default=str(RESOLVE_FRACTION))
+HEATMAP_SCORE = Param("score", Choice(("sigma", "scale")), "sigma",
+                      "sigma: the paper's σ with each point fixed; scale: the scale-aware δ(ε) (the CNBS heat map of "
+                      "--method cnbs-scale).", cli=("--score",))
+#: The options of ``SymmetryProblem.landmarks`` that every method takes (a method's own, as for
+#: ``scores.landmarks``, are checked by its options class, ``selection.method_options``).
+PROBLEM_LANDMARK_PARAMS = (K, METHOD, Param("fixed", Ids(), (), "Input ids of samples fixed already."),
+                           SCORES_AFTER, LANDMARK_SCORE, EPSILON)
 
 
 class SymmetryProblem:
@@ -36,6 +51,8 @@ class SymmetryProblem:
         samples so that they can be fixed later.
     seed, effort : for every search.
     **options : the other options of ``metric_shape`` (metric, backend, target, cache, force...).
+        Every keyword, its constraint and default: ``PROBLEM_PARAMS``; a bad value or an unknown
+        keyword is refused before any work.
 
     Examples
     --------
@@ -48,11 +65,21 @@ class SymmetryProblem:
 
     def __init__(self, x, n_points: int | None = None, *, landmarks=(), seed: int = 0, effort: str = "default",
                  **options):
-        opts, _ = ShapeOptions.take({**options, "seed": seed}, "SymmetryProblem")
-        self.seed = check_seed(seed)
-        self.effort = EFFORT.check(effort)
-        self.force = opts.force
-        self.shape = shape_of(x, n_points, landmarks, opts)
+        v = check_keywords(PROBLEM_PARAMS, dict(options, n_points=n_points, landmarks=landmarks, seed=seed,
+                                                effort=effort), "SymmetryProblem")
+        opts = ShapeOptions.of(v)
+        self._start(shape_of(x, v["n_points"], v["landmarks"], opts), opts, v["effort"])
+
+    @classmethod
+    def of_shape(cls, shape, opts: ShapeOptions, effort: str) -> SymmetryProblem:
+        """The problem of a ``MetricShape`` already built with the checked ``opts`` (``scores.heatmap``)."""
+        problem = cls.__new__(cls)
+        problem._start(shape, opts, effort)
+        return problem
+
+    def _start(self, shape, opts: ShapeOptions, effort: str) -> None:
+        self.seed, self.effort, self.force = opts.seed, effort, opts.force
+        self.shape = shape
         self._searches: dict = {}
 
     def __repr__(self) -> str:
@@ -78,9 +105,9 @@ class SymmetryProblem:
         return self._searches[key]
 
     def score(self, landmarks=(), *, exact="auto", upper: bool = False, time_limit: float | None = None,
-              epsilon: float | None = None, **unknown) -> ScoreResult:
-        """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search."""
-        refuse_unknown(unknown, "SymmetryProblem.score")
+              epsilon: float | None = None) -> ScoreResult:
+        """``ScoreResult`` with ``landmarks`` (input ids of samples) fixed; reuses a kept search.  The
+        options are ``score``'s (``scores.SCORE_PARAMS``), checked by the same rows (``score_settings``)."""
         ids = parse_ids(landmarks)
         settings = score_settings(exact=exact, upper=upper, time_limit=time_limit, effort=self.effort,
                                   epsilon=epsilon, seed=self.seed, force=self.force)
@@ -88,18 +115,20 @@ class SymmetryProblem:
         return promote(report, ScoreResult)
 
     def heatmap(self, landmarks=(), *, resolve_fraction: float | None = None, score: str = "sigma",
-                epsilon: float | None = None, **unknown) -> HeatMapResult:
+                epsilon: float | None = None) -> HeatMapResult:
         """σ (``score="sigma"``, warm-started from the kept search) or δ(ε) (``score="scale"``)
-        with each sample fixed, ``landmarks`` fixed already (paper Figures 1 and 4)."""
-        refuse_unknown(unknown, "SymmetryProblem.heatmap")
+        with each sample fixed, ``landmarks`` fixed already (paper Figures 1 and 4).
+
+        ``resolve_fraction``: share of candidates searched again (``RESOLVE``; None: CNBS's default);
+        ``epsilon``: the level of δ(ε) (None: the median sample spacing)."""
         t0 = time.perf_counter()
         ids = parse_ids(landmarks)
         L = list(self._indices(ids))
-        frac = check_float(RESOLVE_FRACTION if resolve_fraction is None else resolve_fraction, "resolve_fraction",
-                           lo=0.0, hi=1.0)
+        frac = RESOLVE.check(resolve_fraction)
+        frac = RESOLVE_FRACTION if frac is None else frac
         n = self.shape.n_samples
-        score = check_choice(score, "score", ("sigma", "scale"))
-        epsilon = None if epsilon is None else check_float(epsilon, "epsilon", lo=0.0)  # checked for either score
+        score = HEATMAP_SCORE.check(score)
+        epsilon = EPSILON.check(epsilon)  # checked for either score
         guard_heat_map(self.shape, self.force)
         budget, base, unit, eps = None, None, 1.0, None
         if score == "scale":
@@ -116,15 +145,25 @@ class SymmetryProblem:
 
     def landmarks(self, k: int, method: str = "cnbs", *, fixed=(), scores: bool | None = None,
                   **options) -> LandmarkResult:
-        """``k`` new landmarks after ``fixed`` (input ids of samples); CNBS starts from the kept search."""
-        k = check_int(k, "k", lo=0)
-        chosen, runtime = landmark_options(method, self.seed, {**options, "scores": scores, "effort": self.effort,
-                                                               "fixed": self._indices(fixed)})
-        guard_landmarks(self.shape, k, method, scores, self.force)
+        """``k`` new landmarks after ``fixed`` (input ids of samples); CNBS starts from the kept search.
+
+        ``**options``: ``score`` and ``epsilon`` (which score follows each landmark, and the level of δ(ε))
+        and the method's own (``selection.method_options``: ``resolve_fraction``, ``n_eigs``...), as for
+        ``landmarks``; the searches' effort and seed are the problem's.  Every keyword every method takes:
+        ``PROBLEM_LANDMARK_PARAMS``; a bad value or an unknown keyword is refused before any work."""
+        method = METHOD.check(method)
+        v = check_keywords(PROBLEM_LANDMARK_PARAMS, dict(options, k=k, method=method, fixed=fixed, scores=scores),
+                           "SymmetryProblem.landmarks", context=f" for method {method!r}",
+                           others=method_options(method) - {"effort"})
+        own = {key: value for key, value in options.items() if key not in v}
+        common = {"scores": v["scores"], "effort": self.effort, "score": v["score"], "epsilon": v["epsilon"],
+                  "fixed": self._indices(v["fixed"])}
+        chosen, runtime = landmark_options(method, self.seed, {**own, **common})
+        guard_landmarks(self.shape, v["k"], method, v["scores"], self.force)
         if method == "cnbs":
-            runtime.setdefault("base", self.search(fixed))
-        sel = select_landmarks(self.shape, k, method, chosen, **runtime)
+            runtime.setdefault("base", self.search(v["fixed"]))
+        sel = select_landmarks(self.shape, v["k"], method, chosen, **runtime)
         return promote(sel, LandmarkResult)
 
 
-__all__ = ["SymmetryProblem"]
+__all__ = ["HEATMAP_SCORE", "PROBLEM_LANDMARK_PARAMS", "PROBLEM_PARAMS", "RESOLVE", "SymmetryProblem"]

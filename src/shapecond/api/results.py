@@ -30,25 +30,35 @@ from ..symmetry.report import ScoreReport
 from ..symmetry.starts import classical_mds
 
 
-def style_of(cls, style: dict, defaults: dict):
-    """The drawing options ``cls`` (a frozen dataclass of ``viz``) of a ``plot`` call's keywords ``style`` over
-    ``defaults`` (a dict of fields); a keyword that is not one of its fields is refused in one line (``InputError``)."""
-    known = {f.name for f in fields(cls)}
-    unknown = sorted(set(style) - known)
+def check_style(style: dict, known) -> None:
+    """``InputError`` in one line for a keyword of a ``plot`` call's ``style`` that is not one of ``known``."""
+    unknown = sorted(set(style) - set(known))
     if unknown:
         raise InputError(f"plot() got an unknown option {unknown[0]!r} (its options: {', '.join(sorted(known))})")
+
+
+def style_of(cls, style: dict, defaults: dict):
+    """The drawing options ``cls`` (a frozen dataclass of ``viz``) of a ``plot`` call's keywords ``style`` over
+    ``defaults`` (a dict of fields); a keyword that is not one of its fields is refused (``check_style``)."""
+    check_style(style, {f.name for f in fields(cls)})
     return cls(**{**defaults, **style})
 
 
+#: The colouring keywords of a field picture and the ``viz.scene.Colouring`` fields they set (``look_of``).
+PAINT = {"cmap": "cmap", "vmin": "vmin", "vmax": "vmax", "colorbar_label": "label"}
+
+
 def look_of(style: dict, colouring, defaults: dict):
-    """The ``viz.render.Look`` of a ``plot`` call's keywords ``style``: the fields of ``Look`` and the colouring
-    keywords ``cmap``, ``vmin``, ``vmax`` and ``colorbar_label`` (over ``colouring``, a ``viz.scene.Colouring``)."""
+    """The ``viz.render.Look`` of a ``plot`` call's keywords ``style``: the fields of ``Look`` a user sets
+    (not its ``colouring`` and ``extra``) and the colouring keywords ``PAINT`` (over ``colouring``, a
+    ``viz.scene.Colouring``)."""
     from ..viz.render import Look
 
-    style = dict(style)
-    paint = {name: style.pop(key) for key, name in (("cmap", "cmap"), ("vmin", "vmin"), ("vmax", "vmax"),
-                                                   ("colorbar_label", "label")) if key in style}
-    return style_of(Look, style, {**defaults, "colouring": replace(colouring, **paint)})
+    known = {f.name for f in fields(Look)} - {"colouring", "extra"} | set(PAINT)
+    check_style(style, known)
+    look = {k: v for k, v in style.items() if k not in PAINT}
+    paint = {PAINT[k]: v for k, v in style.items() if k in PAINT}
+    return Look(**{**defaults, **look, "colouring": replace(colouring, **paint)})
 
 
 def promote(result, cls, extra: dict | None = None):
@@ -62,7 +72,8 @@ class Pictures:
 
     def to_html(self, path, **kw) -> str:
         """Write this result as a self-contained HTML page; returns the path.  ``kw``: the options of its
-        page (``viz.pages.PAGE_OPTIONS``: ``title``, ``up``...), an unknown one refused in one line."""
+        page (``viz.pages.PAGE_OPTIONS``: ``title``, ``up``...; a match's ``truth``, see ``MatchResult``), an
+        unknown one refused in one line."""
         from ..viz.pages import page_options, write_result
 
         return write_result(self, path, page_options(self, kw))
@@ -81,17 +92,18 @@ class ScoreResult(ScoreReport, Pictures):
     ``.witness_ids``, ``.verdict``, ``.scale`` (δ(ε)) are the report's.
     """
 
-    def plot(self, fig=None, path=None, *, scale: bool = False, max_segments: int = 80, **style):
+    def plot(self, fig=None, path=None, *, scale: bool = False, max_segments: int = 80, up: str | None = None,
+             views: tuple | None = None, title: str | None = None, point_size: float | None = None):
         """The witness map (``scale=True``: the scale-aware witness of δ(ε)) drawn on the shape, its
-        ``max_segments`` longest moves as chords; ``style``: ``up`` (None: guessed), ``views``, ``title``
-        (``viz.scene.Place``).
+        ``max_segments`` longest moves as chords; ``up`` (None: guessed), ``views`` (None: the four default
+        views), ``title`` and ``point_size`` as ``viz.scene.Place``'s.
 
         Onto ``fig`` (or a new Figure) and returned, or written to ``path`` (PNG; returns the path).
         """
         from ..viz.scene import Place
         from ..viz.witness import render_witness_png
 
-        place = style_of(Place, style, {"up": None})
+        place = Place(up=up, views=Place.views if views is None else views, title=title, point_size=point_size)
         if self.shape.geometry is None and path is not None:
             raise InputError("a witness picture needs a mesh or point cloud")
         witness = self.scale.witness if scale else self.score.witness
@@ -107,27 +119,54 @@ class LandmarkResult(LandmarkSelection, Pictures):
         scores = ", ".join("-" if s is None else f"{s:.4g}" for s in self.scores)
         return f"LandmarkResult({self.method}, landmarks={list(self.landmarks)}, {self.score} after each: [{scores}])"
 
-    def plot(self, fig=None, path=None, **style):
+    def plot(self, fig=None, path=None, *, up: str = "z", views: tuple | None = None, title: str | None = None,
+             point_size: float | None = None, labels: bool = True, dpi: int = 110):
         """The landmarks (paper Figure 6 colours) drawn on the shape; onto ``fig`` or written to ``path``.
-        ``style``: the fields of ``viz.render.Look`` (``up``, ``views``, ``title``...) and ``cmap``, ``vmin``,
-        ``vmax``, ``colorbar_label`` (``look_of``)."""
-        from ..viz.render import new_figure, render_png
-        from ..viz.scene import Colouring
+        ``up``, ``views`` (None: the four default views), ``title``, ``point_size`` (None: 6, or 30 for a
+        small point cloud or a distance matrix's points), ``labels`` (number them) and ``dpi``: as
+        ``viz.render.Look``'s."""
+        from ..viz.render import Look, new_figure, render_png
 
         shape = self.shape
         if shape.geometry is not None:
             V, F, verts = shape.geometry.vertices, shape.geometry.faces, list(self.vertices)
         else:  # a distance matrix: its points placed by classical MDS
             V, F, verts = classical_mds(shape.D), None, list(self.sample_indices)
-        size = 6.0 if F is not None or len(V) > 2000 else 30.0
-        look = look_of(style, Colouring(), {"point_size": size})
+        if point_size is None:
+            point_size = 6.0 if F is not None or len(V) > 2000 else 30.0
+        look = Look(views=Look.views if views is None else views, up=up, title=title, point_size=point_size,
+                    labels=labels, dpi=dpi)
         if path is None:
             fig = fig if fig is not None else new_figure()
         return render_png(path, V, F, None, verts, fig=fig, look=look)
 
 
+class FieldPicture:
+    """``plot`` of a result that draws a per-vertex field on its source mesh (``LocalResult``'s doubt field,
+    ``MatchResult``'s error bar's doubt): ``picture_field`` says what."""
+
+    def picture_field(self):
+        """(Geometry, per-vertex values in its internal order, internal landmark ids, ``viz.scene.Colouring``,
+        the default title)."""
+        raise NotImplementedError
+
+    def plot(self, fig=None, path=None, **style):
+        """The field drawn on the mesh, landmarks ringed; onto ``fig`` (or a new Figure) and returned, or
+        written to ``path`` (PNG).  ``style``: the fields of ``viz.render.Look`` (``up`` (None: guessed),
+        ``views``, ``title``, ``dpi``...) and ``cmap``, ``vmin``, ``vmax``, ``colorbar_label`` (``look_of``);
+        another is refused in one line."""
+        from ..viz.render import new_figure, render_png
+        from ..viz.scene import guess_up
+
+        g, values, landmarks, colouring, title = self.picture_field()
+        look = look_of(style, colouring, {"title": title, "up": style.get("up") or guess_up(g)})
+        if path is None:
+            fig = fig if fig is not None else new_figure()
+        return render_png(path, g.vertices, g.faces, values, landmarks=landmarks, fig=fig, look=look)
+
+
 @dataclass(frozen=True, eq=False, repr=False)
-class LocalResult(LocalScore, Pictures):
+class LocalResult(LocalScore, FieldPicture, Pictures):
     """Local symmetry score σ_∞ = sqrt(2/λ_min) (paper Section 5) with its mesh, to draw the doubt field."""
 
     drawing: tuple = field(repr=False, default=None)  # (Geometry, its LocalProblem, zero_tol)
@@ -145,21 +184,14 @@ class LocalResult(LocalScore, Pictures):
             self._doubt["field"] = local_heatmap(problem, g.to_internal(self.landmarks), zero_tol=zero_tol)
         return self._doubt["field"]
 
-    def plot(self, fig=None, path=None, **style):
-        """The doubt field (``doubt``) drawn on the mesh; onto ``fig`` or written to ``path``.  ``style``:
-        the fields of ``viz.render.Look`` (``up``, ``views``, ``title``...) and ``cmap``, ``vmin``,
-        ``vmax``, ``colorbar_label`` (``look_of``)."""
-        from ..viz.render import new_figure, render_png
-        from ..viz.scene import Colouring, guess_up
+    def picture_field(self):
+        """The doubt field (``doubt``) for ``plot``."""
+        from ..viz.scene import Colouring
 
         hm = self.doubt()
         g = self.drawing[0]
-        look = look_of(style, Colouring(label="sigma_inf with the vertex fixed"),
-                       {"title": f"{g.name}: local score with each vertex fixed", "up": style.get("up") or guess_up(g)})
-        if path is None:
-            fig = fig if fig is not None else new_figure()
-        return render_png(path, g.vertices, g.faces, hm.values, landmarks=[int(v) for v in g.to_internal(self.landmarks)],
-                          fig=fig, look=look)
+        return (g, hm.values, [int(v) for v in g.to_internal(self.landmarks)],
+                Colouring(label="sigma_inf with the vertex fixed"), f"{g.name}: local score with each vertex fixed")
 
 
 @dataclass(frozen=True, repr=False)
@@ -247,7 +279,7 @@ class HeatMapResult(Pictures):
 
 
 @dataclass(frozen=True, eq=False)
-class MatchResult(Pictures):
+class MatchResult(FieldPicture, Pictures):
     """A dense map source -> target in input ids (``map[i]`` = target id of source id i, -1: dropped).
 
     Attributes
@@ -261,6 +293,12 @@ class MatchResult(Pictures):
         match), or None without an error bar; use ``suggest``.
     problem : the ``matching.problem.MatchProblem`` the map was read off (None for distance matrices):
         what the page's error field is computed by (``MatchProblem.truth_errors``).
+
+    ``to_html(path, truth=...)`` writes the map's page (colour transfer, linked landmarks, the error bar's
+    doubt field and, with ``truth``, the error field): ``truth`` is one target id per source id (-1: none),
+    "same-ids", the path of such a map file, or ``"SOURCE.vts,TARGET.vts"``, the two shapes' reference files
+    of a remeshed release (the error is then measured at the source's reference vertices;
+    ``viz.truth.truth_map``).
     """
 
     map: np.ndarray
@@ -305,32 +343,15 @@ class MatchResult(Pictures):
         """The summary of ``shapecond match --json`` plus the map itself."""
         return jsonable({**self.summary, "map": self.map})
 
-    def to_html(self, path, truth=None, **kw) -> str:
-        """Write the map as a self-contained HTML page (colour transfer, linked landmarks, the error bar's
-        doubt field and, with ``truth``, the error field); returns the path.
-
-        ``truth``: one target id per source id (-1: none), "same-ids", the path of such a map file, or
-        ``"SOURCE.vts,TARGET.vts"``, the two shapes' reference files of a remeshed release (the error is
-        then measured at the source's reference vertices); see ``viz.truth.truth_map``."""
-        return super().to_html(path, truth=truth, **kw)
-
-    def plot(self, fig=None, path=None, **style):
-        """The error bar's doubt field drawn on the source (where the next landmark should go), landmarks
-        ringed; onto ``fig`` (or a new Figure) and returned, or written to ``path`` (PNG).  ``style``: the
-        fields of ``viz.render.Look`` (``up``, ``views``, ``title``...) and ``cmap``, ``vmin``, ``vmax``,
-        ``colorbar_label`` (``look_of``)."""
-        from ..viz.render import new_figure, render_png
-        from ..viz.scene import Colouring, guess_up
+    def picture_field(self):
+        """The error bar's doubt field on the source (where the next landmark should go) for ``plot``."""
+        from ..viz.scene import Colouring
 
         if self.doubt is None or self.drawing is None:
             raise InputError("the map has no doubt field to draw: match two surfaces with error_bar=True")
         src = self.drawing[0]
-        look = look_of(style, Colouring("turbo", label="doubt, sqrt(area)"),
-                       {"title": f"{src.name}: the error bar's doubt (sqrt(area))", "up": style.get("up") or guess_up(src)})
-        if path is None:
-            fig = fig if fig is not None else new_figure()
-        return render_png(path, src.vertices, src.faces, self.doubt[src.ids], landmarks=list(self.drawing[2]),
-                          fig=fig, look=look)
+        return (src, self.doubt[src.ids], list(self.drawing[2]), Colouring("turbo", label="doubt, sqrt(area)"),
+                f"{src.name}: the error bar's doubt (sqrt(area))")
 
     def __repr__(self) -> str:
         s = self.summary

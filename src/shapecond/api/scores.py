@@ -16,18 +16,18 @@ import time
 
 import numpy as np
 
-from ..checks import check_float, check_int, parse_ids
+from ..checks import parse_ids
 from ..deformation.local_score import ZERO_TOL, LocalProblem
 from ..errors import InputError
-from ..selection import METHODS, method_options, select_landmarks
+from ..selection import method_options, select_landmarks
 from ..symmetry.condition import MAX_PROBE_POINTS, kappa_probes
 from ..symmetry.report import score_report
 from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
-from .options import LANDMARK_SCORE, ShapeOptions, landmark_options, refuse_unknown
-from .params import (EFFORT, EPSILON, IDS_HELP, MAX_POINTS, PROGRESS, REQUIRED, SHAPE_OPTIONS, Choice, Flag, Ids,
-                     IntRange, Param, check_keywords)
-from .problem import SymmetryProblem
+from .options import K, LANDMARK_SCORE, METHOD, SCORES_AFTER, ShapeOptions, landmark_options
+from .params import (EFFORT, EPSILON, FIXED_LANDMARKS, IDS_HELP, PROGRESS, SHAPE_OPTIONS, FloatRange, Ids, IntRange,
+                     Param, check_keywords)
+from .problem import HEATMAP_SCORE, RESOLVE, SymmetryProblem
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
 from .settings import EXACT, TIME_LIMIT, UPPER, score_settings
 
@@ -36,28 +36,29 @@ DEFAULT_KAPPA_POINTS = 8
 
 #: The options of ``score``, each declared once (``params``): ``shapecond score``'s options and ``score``'s
 #: keywords are made from it (``progress``: Python only; the command line shows bars on a terminal).
-SCORE_PARAMS = (*SHAPE_OPTIONS,
-                Param("landmarks", Ids(), (), "Input vertex ids (row indices for a matrix) fixed by every map: "
-                      + IDS_HELP + ".", cli=("--landmarks",)),
-                EXACT, UPPER, TIME_LIMIT, EFFORT, EPSILON, PROGRESS)
-METHOD = Param("method", Choice(METHODS), "cnbs",
-               "cnbs: condition number based sampling (the paper's σ); cnbs-scale: CNBS on the scale-aware score "
-               "δ(ε); fps; pls (Tevs et al., reimplemented); hks (heat kernel signature extrema); user "
-               "(--user-landmarks); cnbs-local.", cli=("--method",))
+SCORE_PARAMS = (*SHAPE_OPTIONS, FIXED_LANDMARKS, EXACT, UPPER, TIME_LIMIT, EFFORT, EPSILON, PROGRESS)
 #: The options of ``landmarks`` that every method takes, each declared once (``params``): ``shapecond
 #: landmarks``'s options and ``landmarks``'s keywords are made from it.  A method's own options
 #: (``selection.method_options``: CNBS's ``resolve_fraction``, HKS's ``n_eigs``, ...) are Python only and
 #: checked by the method's options class.
-LANDMARK_PARAMS = (*SHAPE_OPTIONS,
-                   Param("k", IntRange(0, MAX_POINTS), REQUIRED, "Number of landmarks (method user: 0 = all given).",
-                         cli=("-k",)),
-                   METHOD,
+LANDMARK_PARAMS = (*SHAPE_OPTIONS, K, METHOD,
                    Param("user_landmarks", Ids(), None, "For --method user: vertex ids, " + IDS_HELP + ".",
                          cli=("--user-landmarks",)),
-                   Param("scores", Flag(none=True), None, "Compute the symmetry score after each landmark (always on "
-                         "for cnbs; for the baselines it costs one witness search per landmark).",
-                         cli=("--scores/--no-scores",)),
-                   EFFORT, LANDMARK_SCORE, EPSILON.in_context("--method cnbs-scale or --score scale: "), PROGRESS)
+                   SCORES_AFTER, EFFORT, LANDMARK_SCORE, EPSILON.in_context("--method cnbs-scale or --score scale: "),
+                   PROGRESS)
+#: The options of ``heatmap``, each declared once (``params``): the shape options, the landmarks fixed already
+#: and those of the heat map itself (``SymmetryProblem.heatmap``).
+HEATMAP_PARAMS = (*SHAPE_OPTIONS, Param("landmarks", Ids(), (), "Vertex ids already fixed: " + IDS_HELP + ".",
+                                        cli=("--landmarks",)),
+                  EFFORT, RESOLVE, HEATMAP_SCORE, EPSILON.in_context("--score scale: "), PROGRESS)
+#: The options of ``kappa``, each declared once (``params``).
+KAPPA_PARAMS = (*SHAPE_OPTIONS, FIXED_LANDMARKS,
+                Param("trials", IntRange(1), 20, "Number of perturbed copies probed.", cli=("--trials",)),
+                Param("scale", FloatRange(0, 10, lo_open=True), 0.05,
+                      "Random perturbation size, relative to the RMS distance.", cli=("--scale",)),
+                Param("time_limit", FloatRange(0, lo_open=True, none=True), None,
+                      "Stop probing after this many seconds (the probes so far are reported).", cli=("--time-limit",)),
+                PROGRESS)
 
 
 def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: bool = False,
@@ -108,7 +109,7 @@ def score(x, n_points: int | None = None, *, landmarks=(), exact="auto", upper: 
 
 
 def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs", zero_tol: float | None = None,
-                force: bool = False, **unknown) -> LocalResult:
+                force: bool = False) -> LocalResult:
     """Local symmetry score σ_∞ = sqrt(2/λ_min) of deformation-based matching (paper Section 5).
 
     ``x`` must be a triangle mesh; ``landmarks`` are vertex ids of the input.
@@ -120,7 +121,6 @@ def local_score(x, landmarks=(), *, alpha: float = 1.0, energy: str = "springs",
     >>> sc.local_score("demo:sphere:subdivisions=2").score   # the sphere's rotations are zero modes
     inf
     """
-    refuse_unknown(unknown, "local_score")
     t0 = time.perf_counter()
     g = require_mesh(load(x, force=force))
     guard_local(g.n_vertices, force)
@@ -196,7 +196,10 @@ def heatmap(x, landmarks=(), n_points: int | None = None, *, effort: str = "defa
     """σ (or δ(ε), ``score="scale"``) with each sample fixed: where the next landmark helps most
     (paper Figures 1 and 4).
 
-    ``landmarks`` (input ids) are fixed already; ``**options`` are those of ``metric_shape``.
+    ``landmarks`` (input ids) are fixed already; ``resolve_fraction``, ``score`` and ``epsilon`` as
+    ``SymmetryProblem.heatmap``; ``**options`` are those of ``metric_shape`` (``seed``, ``cache``,
+    ``force``...).  Every keyword, its constraint and default: ``HEATMAP_PARAMS``; a bad value or an
+    unknown keyword is refused before any work.
 
     Examples
     --------
@@ -205,9 +208,12 @@ def heatmap(x, landmarks=(), n_points: int | None = None, *, effort: str = "defa
     >>> hm.best in hm.samples
     True
     """
-    opts, _ = ShapeOptions.take(options, "heatmap")
-    problem = SymmetryProblem(x, n_points, landmarks=landmarks, effort=effort, **vars(opts))
-    return problem.heatmap(landmarks, resolve_fraction=resolve_fraction, score=score, epsilon=epsilon)
+    v = check_keywords(HEATMAP_PARAMS, dict(options, landmarks=landmarks, n_points=n_points, effort=effort,
+                                            resolve_fraction=resolve_fraction, score=score, epsilon=epsilon), "heatmap")
+    opts = ShapeOptions.of(v)
+    problem = SymmetryProblem.of_shape(shape_of(x, v["n_points"], v["landmarks"], opts), opts, v["effort"])
+    return problem.heatmap(v["landmarks"], resolve_fraction=v["resolve_fraction"], score=v["score"],
+                           epsilon=v["epsilon"])
 
 
 def kappa(x, n_points: int | None = None, *, landmarks=(), trials: int = 20, scale: float = 0.05,
@@ -217,6 +223,8 @@ def kappa(x, n_points: int | None = None, *, landmarks=(), trials: int = 20, sca
     The samples are matched to samples and every map is enumerated, so at most
     ``symmetry.condition.MAX_PROBE_POINTS`` samples may be free of landmarks; a mesh
     is sampled with 8 points beside the landmarks unless ``n_points`` says otherwise.
+    ``**options`` are those of ``metric_shape`` (but ``target="dense"``).  Every keyword, its
+    constraint and default: ``KAPPA_PARAMS``; a bad value or an unknown keyword is refused before any work.
 
     Examples
     --------
@@ -225,33 +233,31 @@ def kappa(x, n_points: int | None = None, *, landmarks=(), trials: int = 20, sca
     >>> r.kappa[0] <= r.kappa_probe_max <= r.kappa[1]
     True
     """
-    opts, _ = ShapeOptions.take(options, "kappa")
+    v = check_keywords(KAPPA_PARAMS, dict(options, n_points=n_points, landmarks=landmarks, trials=trials, scale=scale,
+                                          time_limit=time_limit), "kappa")
+    opts, ids, n_points = ShapeOptions.of(v), v["landmarks"], v["n_points"]
     if opts.target == "dense":
         raise InputError("kappa probes match samples to samples: target='dense' does not apply")
-    ids = parse_ids(landmarks)
     limit = MAX_PROBE_POINTS + len(ids)
-    if n_points is not None and check_int(n_points, "n_points", lo=3) > limit:
+    if n_points is not None and n_points > limit:
         raise InputError(f"kappa probes enumerate every map: at most {limit} points with {len(ids)} landmarks, "
                          f"got n_points={n_points}")
     loaded = load(x, largest_component=opts.largest_component, symmetry_map=opts.symmetry_map, force=opts.force)
     if n_points is None and not isinstance(loaded, np.ndarray):
         n_points = min(DEFAULT_KAPPA_POINTS + len(ids), limit)
-    shape = shape_of(loaded, n_points, ids, ShapeOptions(**{**vars(opts), "target": "samples"}))
+    shape = shape_of(loaded, n_points, ids, replace(opts, target="samples"))
     if shape.n_points > limit:
         raise InputError(f"kappa probes enumerate every map: at most {limit} points with {len(ids)} landmarks, "
                          f"the input has {shape.n_points}")
-    trials = check_int(trials, "trials", lo=1)
-    if time_limit is not None:
-        time_limit = check_float(time_limit, "time_limit", lo=0.0, lo_open=True)
-    bar = _bar(trials, "probes") if opts.progress else None
+    bar = _bar(v["trials"], "probes") if opts.progress else None
     try:
-        res = kappa_probes(shape.D, trials=trials, seed=opts.seed, landmarks=list(range(len(ids))),
-                           scale=check_float(scale, "scale", lo=0.0, lo_open=True), time_limit=time_limit,
-                           force=opts.force, progress=None if bar is None else lambda done, total: bar.update(1))
+        res = kappa_probes(shape.D, trials=v["trials"], seed=opts.seed, landmarks=list(range(len(ids))),
+                           scale=v["scale"], time_limit=v["time_limit"], force=opts.force,
+                           progress=None if bar is None else lambda done, total: bar.update(1))
     finally:
         if bar is not None:
             bar.close()
-    return promote(res, KappaResult, {"shape": shape, "landmark_ids": tuple(ids), "trials": trials})
+    return promote(res, KappaResult, {"shape": shape, "landmark_ids": tuple(ids), "trials": v["trials"]})
 
 
 def _bar(total: int, desc: str):
@@ -260,4 +266,4 @@ def _bar(total: int, desc: str):
     return tqdm(total=total, desc=desc, unit=desc[:-1], leave=False)
 
 
-__all__ = ["LANDMARK_PARAMS", "SCORE_PARAMS", "heatmap", "kappa", "landmarks", "local_score", "score"]
+__all__ = ["HEATMAP_PARAMS", "KAPPA_PARAMS", "LANDMARK_PARAMS", "SCORE_PARAMS", "heatmap", "kappa", "landmarks", "local_score", "score"]

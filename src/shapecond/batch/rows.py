@@ -21,7 +21,7 @@ import numpy as np
 from .. import api
 from .._version import __version__
 from ..api import DEFAULT_POINTS
-from ..api.collection import match_both_ways, match_to_template
+from ..api.collection import collection_settings, match_both_ways, match_to_template
 from ..api.params import EFFORT, EPSILON, SHAPE_OPTIONS, SHAPE_PARAMS, cli_defaults, from_cli_keys
 from ..checks import check_float
 from ..errors import InputError, ShapecondError
@@ -239,15 +239,15 @@ def _match_columns(row: dict, job, shape, kw: dict) -> None:
         raise InputError("matching needs the landmarks of both shapes")
     row.update(match_template=job.template, match_direction=job.directions[0], match_source=job.reference,
                match_target=row["file"])
-    options = dict(matcher=kw["matcher"] or "lh05", n_points=kw["points"] or DEFAULT_POINTS, seed=kw["seed"],
-                   backend=kw["backend"], cache=kw["cache"], force=kw["force"],
-                   largest_component=kw["largest_component"], reference=job.reference_words, view=True)
+    settings = collection_settings(dict(matcher=kw["matcher"] or "lh05", n_points=kw["points"] or DEFAULT_POINTS,
+                                        seed=kw["seed"], backend=kw["backend"], cache=kw["cache"], force=kw["force"],
+                                        largest_component=kw["largest_component"]), "batch")
+    heads = (job.reference, shape, job.reference_lm, job.shape_lm, settings)
     if len(job.directions) == 1:
-        fields, vertex_map = match_to_template(job.reference, shape, job.reference_lm, job.shape_lm, **options)
+        fields, vertex_map = match_to_template(*heads, reference=job.reference_words, view=True)
         row.update(fields, _map=vertex_map)
         return
-    (fields, vertex_map), (back, back_map) = match_both_ways(job.reference, shape, job.reference_lm, job.shape_lm,
-                                                             **options)
+    (fields, vertex_map), (back, back_map) = match_both_ways(*heads, reference=job.reference_words, view=True)
     row.update(fields, _map=vertex_map)
     row["_reverse"] = {**back, "match_direction": job.directions[1], "match_source": row["file"],
                        "match_target": job.reference, "_map": back_map}

@@ -10,33 +10,21 @@ from __future__ import annotations
 
 import click
 
-from ..api import kappa
-from ..api.params import IDS_HELP
-from ..checks import parse_ids
+from ..api.scores import KAPPA_PARAMS, kappa
 from ..jsonable import fmt
-from .common import (Command, Float, Int, api_options, emit_json, info, json_option,
-                     pop_shape_options, shape_options)
+from .common import Command, emit_json, info, json_option, progress_enabled, table_options, table_values
 
 
 @click.command("kappa", cls=Command)
 @click.argument("input_spec", metavar="INPUT")
-@shape_options
-@click.option("--landmarks", default=None, help="Vertex ids (row indices for a matrix) fixed by every map: "
-              + IDS_HELP + ".")
-@click.option("--trials", type=Int(1), default=20, show_default=True, help="Number of perturbed copies probed.")
-@click.option("--scale", type=Float(0.0, 10.0, lo_open=True), default=0.05, show_default=True,
-              help="Random perturbation size, relative to the RMS distance.")
-@click.option("--time-limit", type=Float(0.0, lo_open=True), default=None,
-              help="Stop probing after this many seconds (the probes so far are reported).")
+@table_options(KAPPA_PARAMS)
 @json_option
-def command(input_spec, landmarks, trials, scale, time_limit, as_json, **kwargs):
+def command(input_spec, as_json, **o):
     """Probe κ (Eq. 4) with exact matchings of perturbed copies; report σ <= κ <= 2σ + 1.
 
     For meshes N defaults to 8 samples; at most 9 samples may be free of landmarks.
     """
-    n_points, options = api_options(pop_shape_options(kwargs))
-    res = kappa(input_spec, n_points, landmarks=parse_ids(landmarks), trials=trials, scale=scale,
-                time_limit=time_limit, **options)
+    res = kappa(input_spec, **table_values(KAPPA_PARAMS, o), progress=progress_enabled())
     if as_json:
         emit_json(res.to_dict())
         return

@@ -1,13 +1,12 @@
 """Options and helpers shared by the sub-commands.
 
-``shape_options`` adds the options that turn an INPUT into a metric shape and
-``api_options`` turns them into the keyword arguments of the Python interface
-(``shapecond.api``), which every command calls; ``emit_json`` prints the one JSON object of ``--json``
+``shape_options`` adds the options that turn an INPUT into a metric shape under the command
+line's names (batch stores them so; ``params.from_cli_keys`` reads them back); ``emit_json`` prints the one JSON object of ``--json``
 (infinite values as the string "inf", missing ones as null).  Numeric options
 use the parameter types ``Int``, ``Float`` and ``SEED``, which call the checks
 of ``shapecond.checks``: a bad value gets the same one-line message as from
 the Python functions.  An option declared in a parameter table (``api.params``:
-``match``'s, ``score``'s, ``landmarks``'s, and the shared ``--points``, ``--seed``,
+``match``'s, ``score``'s, ``landmarks``'s, ``heatmap``'s, ``kappa``'s, ``metric_shape``'s, and the shared ``--points``, ``--seed``,
 ``--geodesic-backend``, ...) is made by ``param_option`` (a whole table:
 ``table_options``, read back by ``table_values``), with its name, default,
 help and check from the table.  Every sub-command is a :class:`Command`: before
@@ -21,8 +20,8 @@ import sys
 
 import click
 
-from ..api.params import (BACKEND, CACHE, DEFAULT_POINTS, EPSILON, FORCE, POINTS, REQUIRED, SHAPE_OPTIONS, SHAPE_PARAMS,
-                          Choice, File, Flag, FlagOr, Ids, IntRange, Param, cli_key, from_cli_keys)
+from ..api.params import (BACKEND, CACHE, DEFAULT_POINTS, FORCE, POINTS, REQUIRED, SHAPE_OPTIONS,
+                          Choice, File, Flag, FlagOr, Ids, IntRange, Param, cli_key)
 from ..api.params import SEED as SEED_PARAM
 from ..checks import check_float, check_int, check_seed
 from ..errors import InputError
@@ -208,16 +207,9 @@ EPSILON_FROM_OPTION = click.option(
          "truth (api.level): δ at your shapes' own deformation level.")
 
 
-def epsilon_options(what: str):
-    """``--epsilon`` (``params.EPSILON``, its help prefixed by ``what``) and ``--epsilon-from``: the distortion
-    level ε of δ, given or read off matched maps."""
-    def add(f):
-        return apply(f, [param_option(EPSILON.in_context(what)), EPSILON_FROM_OPTION])
-    return add
-
-
 def resolve_epsilon(input_spec, o: dict, n_points, options: dict) -> tuple[float | None, dict]:
-    """(ε to pass on, the JSON fields saying where it comes from) from ``epsilon_options``."""
+    """(ε to pass on, the JSON fields saying where it comes from) from ``--epsilon`` (a table's ``EPSILON`` row)
+    and ``EPSILON_FROM_OPTION``."""
     if o.get("epsilon_from") and o.get("epsilon") is not None:
         raise InputError("give --epsilon or --epsilon-from, not both")
     if not o.get("epsilon_from"):
@@ -235,15 +227,6 @@ def resolve_epsilon(input_spec, o: dict, n_points, options: dict) -> tuple[float
 def pop_shape_options(kwargs: dict) -> dict:
     """Split the shape options out of a command's keyword arguments."""
     return {k: kwargs.pop(k) for k in SHAPE_OPTION_NAMES if k in kwargs}
-
-
-def api_options(cli_options: dict, progress: bool | None = None) -> tuple[int | None, dict]:
-    """``(n_points, keyword arguments of shapecond.api)`` from the shape options of a command.
-
-    ``progress``: progress bars (default: when stderr is a terminal).
-    """
-    kw = {**from_cli_keys(SHAPE_PARAMS, cli_options), "progress": progress_enabled() if progress is None else progress}
-    return cli_options.get(cli_key(POINTS)), kw
 
 
 def emit_json(obj) -> None:
