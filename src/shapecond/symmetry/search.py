@@ -184,7 +184,8 @@ def nearest_targets(D: np.ndarray, k: int) -> np.ndarray:
     knn = np.ascontiguousarray(np.argpartition(D, k, axis=1)[:, : k + 1])
     # drop each target itself from its own list (distance 0)
     knn = np.ascontiguousarray(np.array([r[r != i][:k] for i, r in enumerate(knn)], dtype=np.int64))
-    if not D.flags.writeable:
+    if not D.flags.writeable:  # shared by every search on D: read-only, as D is
+        knn.flags.writeable = False
         _KNN[key] = (weakref.ref(D, lambda _, key=key: _KNN.pop(key, None)), knn)
     return knn
 
