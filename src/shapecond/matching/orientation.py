@@ -49,7 +49,15 @@ on average: six landmarks, FAQ start, every landmark method, TOSCA_r test pairs 
 benchmark ``sides``.  Weighting the block by its
 effective number of independent columns (a participation ratio) brought the pair to 30.7 and cost 4-5 ×10⁻³
 on cat2 → cat3; whitening every column on its own or sharing the block's weight by column
-multiplicity left it at 39-42.
+multiplicity left it at 39-42.  Also tried, 6 exact landmarks, FAQ's sample map fixed, the dense stage
+varied (TOSCA_r one test pair per class, FPS/PLS/HKS/CNBS: 32 rows; SMAL_r the cow to 8 animals, 5 landmark
+methods: 40 rows; means in 10⁻³ sqrt(area)): no sides in the dense stage, TOSCA_r 17.9 → 18.1 (david 45.5 →
+23.5) but SMAL_r 43.4 → 51.6; the sides of the first three landmarks' pairs only, TOSCA_r 17.9 → 18.7;
+each pair's sides weighted by ``exp(−e² / 2σ²)`` of the detour ``e = d_a + d_b − d_ab`` through the point
+(σ the anchors' width; the sides near the geodesic between the pair, where a pose cannot turn them), TOSCA_r
+17.9 → 17.5 (david 45.5 → 37.7) but SMAL_r 43.4 → 47.4; the less distorted of the maps with and without the
+sides (``error_bar.map_distortion``), SMAL_r 43.4 → 44.2.  Between species every pair's sides, far ones
+included, are what localise the map.
 
 The outward normal: face normals by the file's vertex order, the whole mesh
 flipped when its signed volume is negative (a closed surface given inside
