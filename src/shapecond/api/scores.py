@@ -25,7 +25,7 @@ from ..symmetry.report import score_report
 from .guards import guard_landmarks, guard_local
 from .inputs import load, require_mesh, shape_of
 from .options import K, LANDMARK_SCORE, METHOD, SCORES_AFTER, ShapeOptions, landmark_options
-from .params import (EFFORT, EPSILON, FIXED_LANDMARKS, IDS_HELP, PROGRESS, SHAPE_OPTIONS, FloatRange, Ids, IntRange,
+from .params import (EFFORT, EPSILON, FIXED_LANDMARKS, IDS_HELP, POINTS, PROGRESS, SHAPE_OPTIONS, FloatRange, Ids, IntRange,
                      Param, check_keywords)
 from .problem import HEATMAP_SCORE, RESOLVE, SymmetryProblem
 from .results import HeatMapResult, KappaResult, LandmarkResult, LocalResult, ScoreResult, promote
@@ -52,7 +52,9 @@ HEATMAP_PARAMS = (*SHAPE_OPTIONS, Param("landmarks", Ids(), (), "Vertex ids alre
                                         cli=("--landmarks",)),
                   EFFORT, RESOLVE, HEATMAP_SCORE, EPSILON.in_context("--score scale: "), PROGRESS)
 #: The options of ``kappa``, each declared once (``params``).
-KAPPA_PARAMS = (*SHAPE_OPTIONS, FIXED_LANDMARKS,
+#: kappa's N: ``DEFAULT_KAPPA_POINTS`` free samples of a mesh by default (its probes enumerate every map).
+KAPPA_POINTS = replace(POINTS, cli_default=f"{DEFAULT_KAPPA_POINTS} + the landmarks for a mesh, every point of a matrix")
+KAPPA_PARAMS = (KAPPA_POINTS, *(p for p in SHAPE_OPTIONS if p is not POINTS), FIXED_LANDMARKS,
                 Param("trials", IntRange(1), 20, "Number of perturbed copies probed.", cli=("--trials",)),
                 Param("scale", FloatRange(0, 10, lo_open=True), 0.05,
                       "Random perturbation size, relative to the RMS distance.", cli=("--scale",)),
