@@ -167,6 +167,27 @@ def test_swap_search_estimates_skip_no_move(seed, kernel):
     assert runs[0][0] == runs[1][0] > 0 and np.array_equal(runs[0][1], runs[1][1])
 
 
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 10_000), st.integers(0, 30), st.sampled_from([1e-3, 0.5, 1.0, 3.0, 1e3]))
+def test_selection_from_a_guess_is_the_order_statistic(seed, rank, factor):
+    # any guess, far or near, below or above (ties included): the value np.partition gives
+    rng = np.random.default_rng(seed)
+    buf = np.round(rng.exponential(size=31), 1)  # repeated values
+    want = np.partition(buf, rank)[rank]
+    assert R._select_near(buf.copy(), rank, want * factor + 1e-9, np.empty(31)) == want
+    assert R._select_near(buf.copy(), rank, want, np.empty(31)) == want
+
+
+def test_quantile_costs_are_the_quantiles_of_the_disagreements():
+    Ds, Dt, truth = _instance(60, 4, noise=0.05)
+    t = np.random.default_rng(4).permutation(60).astype(np.int64)
+    rows, anchors = np.arange(3, 60), np.arange(0, 60, 3)
+    band = np.ascontiguousarray(np.concatenate([t[rows, None], R.neighbours(Dt, 9)[t[rows]]], axis=1))
+    got = R._quantile_cost(Ds, Dt, t, rows, band, anchors, 5)
+    dis = np.abs(Ds[rows][:, None, anchors] - Dt[band][:, :, t[anchors]])
+    assert np.array_equal(got, np.partition(dis, 5, axis=2)[:, :, 5])
+
+
 def test_robust_reassignment_keeps_a_permutation_and_recovers_a_shifted_region():
     Ds, Dt, truth = _instance(60, 3)
     t = truth.copy()
