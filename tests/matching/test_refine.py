@@ -123,9 +123,69 @@ def test_swap_search_makes_the_moves_of_a_full_rescan(seed, kernel):
     for max_moves in (3, 50 * n):
         want, moves = _brute_force_swaps(Ds, Dt, t0, knn, set(free.tolist()), kernel, max_moves)
         t = t0.astype(np.int64)
-        lists = R._Lists(knn, R.rank_table(knn), C.support_lists(Ds, p[3]))
+        lists = R.swap_lists(knn, C.support_lists(Ds, p[3]))
         got = R._swap_search(Ds, Dt, t, lists, isfree, p, max_moves)
         assert got == moves and np.array_equal(t, want)
+
+
+def test_reverse_extension_holds_every_swap_partners_gain():
+    # a partner b of a has T b in knn[T a]: T a must be in b's band (knn[T b], then the reverse ones)
+    _, Dt, _ = _instance(50, 7, noise=0.05)
+    knn = R.neighbours(Dt, 4)
+    ext, length = R.reverse_extension(knn)
+    assert np.array_equal(ext[:, :4], knn) and np.all(ext[np.arange(ext.shape[1]) >= length[:, None]] == -1)
+    for u in range(50):
+        row = ext[u, :length[u]]
+        assert len(set(row.tolist())) == row.size and u not in row
+        assert set(row[4:].tolist()) == {v for v in range(50) if u in knn[v] and v not in knn[u]}
+    rank = R.rank_table(ext)
+    for v in range(50):
+        for u in knn[v]:
+            assert ext[u, rank[u, v] - 1] == v
+
+
+@settings(max_examples=8, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(KERNELS + [C.Kernel(0.05, 0.0, 0.3)]))
+def test_swap_search_estimates_skip_no_move(seed, kernel):
+    # gains at reverse neighbours are summed only when their band estimate (within the slack)
+    # may be a sample's best: the same moves as summing every one of them (infinite slack)
+    n, k = 150, 6
+    Ds, Dt, _ = _instance(n, seed, noise=0.05)
+    t0 = np.random.default_rng(seed).permutation(n).astype(np.int64)
+    isfree = np.ones(n, dtype=np.bool_)
+    isfree[[3, 77]] = False
+    p = kernel.params()
+    lists = R.swap_lists(R.neighbours(Dt, k), C.support_lists(Ds, p[3]))
+    runs = []
+    for slack in (math.inf, None):
+        t = t0.copy()
+        if slack is None:
+            moves = R._swap_search(Ds, Dt, t, lists, isfree, p, 50 * n)
+        else:
+            moves = R._moves(Ds, Dt, t, lists, isfree, p, R._bands(Ds, Dt, t, lists, p, slack), 50 * n)
+        runs.append((moves, t))
+    assert runs[0][0] == runs[1][0] > 0 and np.array_equal(runs[0][1], runs[1][1])
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 10_000), st.integers(0, 30), st.sampled_from([1e-3, 0.5, 1.0, 3.0, 1e3]))
+def test_selection_from_a_guess_is_the_order_statistic(seed, rank, factor):
+    # any guess, far or near, below or above (ties included): the value np.partition gives
+    rng = np.random.default_rng(seed)
+    buf = np.round(rng.exponential(size=31), 1)  # repeated values
+    want = np.partition(buf, rank)[rank]
+    assert R._select_near(buf.copy(), rank, want * factor + 1e-9, np.empty(31)) == want
+    assert R._select_near(buf.copy(), rank, want, np.empty(31)) == want
+
+
+def test_quantile_costs_are_the_quantiles_of_the_disagreements():
+    Ds, Dt, truth = _instance(60, 4, noise=0.05)
+    t = np.random.default_rng(4).permutation(60).astype(np.int64)
+    rows, anchors = np.arange(3, 60), np.arange(0, 60, 3)
+    band = np.ascontiguousarray(np.concatenate([t[rows, None], R.neighbours(Dt, 9)[t[rows]]], axis=1))
+    got = R._quantile_cost(Ds, Dt, t, rows, band, anchors, 5)
+    dis = np.abs(Ds[rows][:, None, anchors] - Dt[band][:, :, t[anchors]])
+    assert np.array_equal(got, np.partition(dis, 5, axis=2)[:, :, 5])
 
 
 def test_robust_reassignment_keeps_a_permutation_and_recovers_a_shifted_region():
@@ -176,7 +236,8 @@ def test_compiled_gain_tables_equal_the_gain_entries(seed, kernel):
     rows = np.arange(1, 12)
     img = t[rows]
     entries = np.array([[C._gain_entry(Ds, Dt, t, x, y, p) for y in img] for x in rows])
-    band = C._gain_band(Ds, Dt, t, rows, np.ascontiguousarray(np.broadcast_to(img, (rows.size, img.size))), p)
+    band = C._gain_band(Ds, Dt, t, rows, np.ascontiguousarray(np.broadcast_to(img, (rows.size, img.size))), p,
+                        np.full(rows.size, img.size))
     cols = C._gain_columns(Ds, np.ascontiguousarray(Dt[img, :].T), t, rows, p)
     assert np.array_equal(cols, band)
     assert np.allclose(band, entries, rtol=1e-12, atol=1e-15)

@@ -130,11 +130,12 @@ def _gain_row(Ds, Dt, t, x, cols, out, kp):
 
 
 @numba.njit(cache=True, error_model="numpy", parallel=True)
-def _gain_band(Ds, Dt, t, rows, band, kp):
-    """Q[rows[i], band[i, j]] (module docstring), one row per thread."""
+def _gain_band(Ds, Dt, t, rows, band, kp, lengths):
+    """Q[rows[i], band[i, j]] (module docstring) for ``j < lengths[i]`` (the rest left unset), one
+    row per thread."""
     Q = np.empty(band.shape)
     for i in numba.prange(rows.size):
-        _gain_row(Ds, Dt, t, rows[i], band[i], Q[i], kp)
+        _gain_row(Ds, Dt, t, rows[i], band[i, :lengths[i]], Q[i, :lengths[i]], kp)
     return Q
 
 
