@@ -16,7 +16,7 @@ from shapecond.api.options import ShapeOptions
 from shapecond.api.params import (BACKEND, CACHE, EFFORT, FORCE, LARGEST_COMPONENT, POINTS, SEED, SHAPE_PARAMS,
                                   REQUIRED, Ids, cli_key)
 from shapecond.api.inputs import METRIC_SHAPE_PARAMS
-from shapecond.api.scores import HEATMAP_PARAMS, KAPPA_PARAMS, LANDMARK_PARAMS, SCORE_PARAMS
+from shapecond.api.scores import HEATMAP_PARAMS, KAPPA_PARAMS, KAPPA_POINTS, LANDMARK_PARAMS, SCORE_PARAMS
 from shapecond.cli.cmd_heatmap import command as heatmap_command
 from shapecond.cli.cmd_kappa import command as kappa_command
 from shapecond.cli.cmd_landmarks import command as landmarks_command
@@ -140,14 +140,17 @@ def test_the_shape_rows_are_the_shape_options_fields():
 
 def test_the_shared_options_are_one_param_in_every_table():
     """``seed``, ``backend``, ... are the same object in match's, score's and landmarks' tables; ``n_points`` is
-    ``POINTS`` everywhere, with match's own default (it always samples 400)."""
+    ``POINTS`` everywhere, with match's own default (it always samples 400) and kappa's shown default (8 free
+    samples of a mesh: ``KAPPA_POINTS``, the same constraint)."""
     for table in (MATCH_PARAMS, SCORE_PARAMS, LANDMARK_PARAMS, HEATMAP_PARAMS, KAPPA_PARAMS, METRIC_SHAPE_PARAMS):
         rows = {p.name: p for p in table}
         for shared in (SEED, BACKEND, CACHE, LARGEST_COMPONENT, FORCE):
             assert rows[shared.name] is shared
-        assert rows["n_points"] is POINTS or rows["n_points"] == POINTS.with_default(400)
+        assert (rows["n_points"] is POINTS or rows["n_points"] == POINTS.with_default(400)
+                or rows["n_points"] == dataclasses.replace(POINTS, cli_default=KAPPA_POINTS.cli_default))
     for table in (SCORE_PARAMS, LANDMARK_PARAMS, HEATMAP_PARAMS, KAPPA_PARAMS, METRIC_SHAPE_PARAMS):
-        assert all(p in table for p in SHAPE_PARAMS) and POINTS in table
+        assert all(p in table for p in SHAPE_PARAMS) and (POINTS in table or KAPPA_POINTS in table)
+    assert KAPPA_POINTS in KAPPA_PARAMS and "8" in KAPPA_POINTS.cli_default
     assert all(EFFORT in table for table in (SCORE_PARAMS, LANDMARK_PARAMS, HEATMAP_PARAMS))
 
 
