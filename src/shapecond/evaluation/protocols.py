@@ -43,7 +43,7 @@ import numpy as np
 
 from ..api import load as load_shape
 from ..errors import InputError
-from ..matching import refine
+from ..matching import consistency
 from ..matching.candidates import recall
 from ..matching.metrics import errors_from_rows, normalise
 from ..matching.error_bar import ErrorBar
@@ -168,7 +168,7 @@ def _corresponding_cell(problem: MatchProblem, bars: bool = True):
     if sm.candidates is not None:
         extra["recall"] = recall(sm.candidates, truth)
     if "h" in sm.info:
-        extra["objective_ratio"] = sm.info["objective"] / refine.objective(src.D, carried.D, truth,
+        extra["objective_ratio"] = sm.info["objective"] / consistency.objective(src.D, carried.D, truth,
                                                                              fine_kernel(sm.info["h"]))
     return raw, raw, extra
 

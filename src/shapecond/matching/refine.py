@@ -40,9 +40,8 @@ from scipy.optimize import linear_sum_assignment
 
 from shapecond.selection.fps import fps_landmarks
 
-from shapecond.matching.consistency import (  # noqa: F401  (SUPPORT, objective: spectral and evaluation read refine.*)
-    SUPPORT, Kernel, _f64, _gain_band, _gain_columns, _gain_near, _gain_row, _k, _objective_near, _support_terms,
-    gain, objective, support_lists)
+from shapecond.matching.consistency import (
+    Kernel, _f64, _gain_band, _gain_columns, _gain_near, _gain_row, _k, _objective_near, _support_terms, support_lists)
 
 
 def rank_table(knn: np.ndarray) -> np.ndarray:

@@ -14,7 +14,7 @@ every such choice is listed here.
 
        M[a, b] = K(D_s[x, x'], D_t[y, y'])    for a = (x->y), b = (x'->y')
 
-   with a consistency kernel ``K`` (``refine.Kernel``), ``M[a, b] = 0`` when the
+   with a consistency kernel ``K`` (``consistency.Kernel``), ``M[a, b] = 0`` when the
    two assignments conflict (``x = x'`` or ``y = y'``, LH05's mapping
    constraints) and on the diagonal (no unary term: the descriptor already
    chose the candidates).  The first round uses LH05's Gaussian
@@ -76,6 +76,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse.linalg import LinearOperator, eigsh
 
 from shapecond.errors import InputError, TooLargeError
+from shapecond.matching import consistency
 from shapecond.matching import refine as R
 from shapecond.matching.candidates import Candidates, band_candidates, check_distances, k_best_candidates
 from shapecond.matching.nested import core_size, with_landmarks
@@ -119,7 +120,7 @@ def _affinity_kernel(Ds, Dt, src, tgt, kp, upper):
 
     ``upper``: write the upper triangle (``j >= i``) only and leave the rest 0, all that
     ``principal_eigenvector``'s ``ssymv`` reads of a symmetric ``M`` (half the work).  The
-    entries are ``refine._k``'s, evaluated branch-free (the zero cases selected after the
+    entries are ``consistency._k``'s, evaluated branch-free (the zero cases selected after the
     arithmetic) so that the inner loop vectorises: ~3x faster, the same values.
     """
     t0, r2, iw2, cut2 = kp
@@ -133,7 +134,7 @@ def _affinity_kernel(Ds, Dt, src, tgt, kp, upper):
             d = ds[x2]
             d2 = d * d
             diff = d - dt[y2]
-            u = max(1.0 - diff * diff / (R.SUPPORT * R.SUPPORT * (t0 + r2 * d2)), 0.0)
+            u = max(1.0 - diff * diff / (consistency.SUPPORT * consistency.SUPPORT * (t0 + r2 * d2)), 0.0)
             w = 1.0 - d2 * iw2
             v = u * u * w * w
             out[j] = 0.0 if (x == x2 or y == y2 or d2 >= cut2) else v
@@ -171,7 +172,7 @@ def _sparse_affinity_kernel(out, Ds, Dt, cand, by_source, near, kp):
                 j = order[r]
                 y2 = tgt[j]
                 if y2 != y:
-                    v = R._k(d, Dt[y, y2], kp)
+                    v = consistency._k(d, Dt[y, y2], kp)
                     indices[p] = j
                     data[p] = v
                     p += 1 if v > 0.0 else 0
@@ -183,7 +184,7 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
                     compiled: bool = True, upper: bool = False):
     """Pairwise affinity ``M`` over the candidates (module docstring, step 2), float32.
 
-    ``kernel`` is a ``refine.Kernel`` or a float ``s`` (LH05's kernel of width
+    ``kernel`` is a ``consistency.Kernel`` or a float ``s`` (LH05's kernel of width
     ``s``).  A kernel of finite radius gives a ``scipy.sparse.csr_matrix`` (most
     candidate pairs are beyond its support), otherwise a dense array.
     ``compiled=True`` fills ``M`` with a numba kernel (one pass, ~10x faster);
@@ -191,7 +192,7 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
     ``upper=True``: a compiled dense ``M`` has its upper triangle only (the rest 0),
     enough for ``principal_eigenvector`` (``M`` is symmetric) at half the cost.
     """
-    kernel = kernel if isinstance(kernel, R.Kernel) else R.Kernel(float(kernel))
+    kernel = kernel if isinstance(kernel, consistency.Kernel) else consistency.Kernel(float(kernel))
     C = cand.size
     Ds = np.ascontiguousarray(D_source, dtype=np.float64)
     Dt = np.ascontiguousarray(D_target, dtype=np.float64)
@@ -200,7 +201,7 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
     if compiled and np.isfinite(kernel.radius):
         order = np.argsort(src, kind="stable")
         starts = np.searchsorted(src[order], np.arange(Ds.shape[0] + 1))
-        near = R.support_lists(Ds, kp[3])
+        near = consistency.support_lists(Ds, kp[3])
         # room for every row's upper bound, allocated by NumPy (huge pages: few page faults)
         counts = np.diff(starts)
         bound = int(np.where(near >= 0, counts[np.maximum(near, 0)], 0).sum(axis=1)[src].sum())
@@ -221,7 +222,7 @@ def affinity_matrix(D_source, D_target, cand: Candidates, kernel, block: int = 5
         hi = min(C, lo + block)
         d = Ds[np.ix_(src[lo:hi], src)]
         diff = d - Dt[np.ix_(tgt[lo:hi], tgt)]
-        u = np.maximum(1.0 - diff * diff / (R.SUPPORT ** 2 * (t0 + r2 * d * d)), 0.0)
+        u = np.maximum(1.0 - diff * diff / (consistency.SUPPORT ** 2 * (t0 + r2 * d * d)), 0.0)
         blk = (u * (1.0 - d * d * iw2)) ** 2
         blk[d * d >= cut2] = 0.0
         blk[src[lo:hi, None] == src[None, :]] = 0.0
@@ -336,10 +337,10 @@ def complete_map(D_source, D_target, t: np.ndarray) -> np.ndarray:
     return t
 
 
-def fine_kernel(h: float) -> R.Kernel:
+def fine_kernel(h: float) -> consistency.Kernel:
     """The local kernel of the refinement (module docstring, step 5) for sample spacing ``h``;
-    ``info["objective"]`` of a refined ``lh05_match`` is ``refine.objective`` under it."""
-    return R.Kernel(0.5 * h, 0.0, 3.0 * h)
+    ``info["objective"]`` of a refined ``lh05_match`` is ``consistency.objective`` under it."""
+    return consistency.Kernel(0.5 * h, 0.0, 3.0 * h)
 
 
 @dataclass(frozen=True)
@@ -456,7 +457,7 @@ class _LH05:
         iu = np.triu_indices(Ds.shape[0], 1)
         ds = Ds[iu]
         rel = np.abs(ds - Dt[t][:, t][iu]) / np.maximum(ds, h)
-        coarse = R.Kernel(h, 2.0 * float(np.median(rel)))
+        coarse = consistency.Kernel(h, 2.0 * float(np.median(rel)))
         fine = fine_kernel(h)
         t, _ = R.polish(Ds, Dt, t, free, coarse, knn)
         best = None
