@@ -226,3 +226,39 @@ def test_cut_verifications_choose_what_full_ones_do(monkeypatch):
             want = cnbs_landmarks(D, n, 4, **kw)
         assert got["landmarks"] == want["landmarks"] and got["scores"] == want["scores"]
     assert calls["cut"] and calls["complete"]  # otherwise this test tests nothing
+
+
+def _plane_points(n, seed):
+    p = np.random.default_rng(seed).uniform(size=(n, 2))
+    return _dist(p)
+
+
+def _feasible_for(D, t, landmarks, budget):
+    """``t`` is a map of δ(ε)'s problem with ``landmarks`` fixed: it fixes them, stays within the Dist²
+    budget and keeps every landmark row within budget / N (``symmetry.scale``)."""
+    from shapecond.symmetry import objective as obj
+
+    n = len(t)
+    return (all(t[landmarks] == landmarks) and obj.dist2(D, t) <= budget
+            and float(np.max(obj.anchor_rows(D, t, landmarks))) <= budget / n)
+
+
+def test_scale_heat_map_credits_the_previous_map_only_within_the_candidates_row_budget():
+    """The previous step's map fixes candidate 4 but distorts its distances beyond the row budget that
+    fixing 4 adds: crediting it gave 4 the previous value (1.440), above the exact optimum (1.165)."""
+    from shapecond.symmetry import objective as obj
+    from shapecond.symmetry.scale import budget_of, default_epsilon
+    from shapecond.symmetry.search import witness_search
+    from tests.helpers import brute_delta
+
+    n, p = 7, 4
+    D = _plane_points(n, 1)
+    eps = default_epsilon(D)
+    budget = budget_of(eps, n, D)
+    base = witness_search(D, n, [0], effort="quick", budget=budget)
+    prev = np.asarray(base.witness)
+    assert prev[p] == p and obj.anchor_rows(D, prev, [p])[0] > budget / n  # the premise
+    hm = heat_map(D, n, [0], base=base, budget=budget, options=HeatMapOptions(effort="quick"))
+    assert hm.values[p] <= brute_delta(D, eps, [0, p]) * math.sqrt(n) + 1e-9
+    assert hm.values[p] < base.sigma and _feasible_for(D, np.asarray(hm.results[p].witness), [0, p], budget)
+

@@ -9,8 +9,11 @@ scores after each landmark form the "vector of symmetry scores" of Section 6.
 heat map is a lower bound per candidate, assembled in four steps:
 
 1. **Fixed by the witness.**  If the best witness map T of the previous step already
-   fixes p (T(p) = p, e.g. p on the mirror plane of a mirror witness), T is feasible
-   with p fixed, so the bound does not move: heat[p] = σ_L.  No search is run.
+   fixes p (T(p) = p, e.g. p on the mirror plane of a mirror witness) and, on the
+   scale-aware score (``budget``), keeps p's distance row within budget / N (the
+   constraint p adds as a landmark: ``objective.anchor_rows``, O(N)), T is feasible with
+   p fixed, so the bound does not move: heat[p] = σ_L.  No search is run.  A T that fixes
+   p but breaks its row is not a map of p's problem: p is searched as the others are.
 2. **Warm start.**  Otherwise each of the best ``n_maps`` distinct witness maps is
    repaired by one move so that T(p) = p (swap p with its pre-image q, T(q) := T(p);
    or, with dense targets when p is nobody's image, reassign T(p) := p), and the
@@ -94,6 +97,7 @@ import numpy as np
 from ..checks import check_landmark_count
 from ..errors import InputError
 from ..threads import single_blas_thread
+from ..symmetry import objective as obj
 from ..symmetry.objective import isometry_floor, swap_terms
 from ..symmetry.scale import resolution
 from ..symmetry.search import witness_search
@@ -331,6 +335,9 @@ class _HeatMapRun:
         self.floor[cand] = best_swap_avoiding(swap_table(D, n, budget), L, cand)  # step 3
         self.results = {}
         self.best_t = maps[0]
+        self.credited = self._credited(cand)  # step 1
+        # every warm map fixes p and the best is feasible with p fixed: nothing to verify (step 5)
+        self.settled = self.credited & (self.moved == 0.0)
         self.polish = WarmPolisher(D, n, maps, L, budget)
         n_full = int(math.ceil(opts.resolve_fraction * cand.size))
         self.order = cand[np.lexsort((cand, -self.moved[cand]))]  # the tie-break order of HeatMap.argmin
@@ -348,6 +355,19 @@ class _HeatMapRun:
             self.tie = math.sqrt(n) * resolution(D, n)
             self.spread = D[:n, L].min(axis=1)
 
+    def _credited(self, cand) -> np.ndarray:
+        """Step 1: True for the candidates whose problem the best base map is feasible for, so that
+        its value σ_L is theirs: it fixes p and, with a budget, keeps p's distance row within
+        budget / N (the constraint p adds as a landmark, ``objective.anchor_rows``; its other
+        constraints are those of L, which the base map meets).  O(N) a candidate."""
+        t, n = self.best_t, self.n
+        ok = np.zeros(n, dtype=bool)
+        ok[cand] = t[cand] == cand
+        if self.budget is not None and ok.any():
+            fixed = np.flatnonzero(ok)
+            ok[fixed] = obj.anchor_rows(self.D, t, fixed) <= self.budget / n
+        return ok
+
     def take(self, p, r):
         """Keep the search result ``r`` for candidate ``p`` if it raises its bound."""
         if r is not None and (float(r.sigma) > self.values[p] or p not in self.results):
@@ -357,7 +377,7 @@ class _HeatMapRun:
     def evaluate(self, p, stop):
         """Steps 1, 2 and 4 for candidate p; True when cut short above ``stop``."""
         opts, L = self.opts, self.L
-        if self.best_t[p] == p:  # 1. fixed by the witness
+        if self.credited[p]:  # 1. fixed by the witness, within p's row budget
             self.values[p] = max(self.sigma0, self.floor[p])
             self.results[p] = self.base
             return False
@@ -410,7 +430,7 @@ class _HeatMapRun:
         if count:
             self.verified[c] = True
             self.rounds += 1
-        if self.moved[c] == 0.0:
+        if self.settled[c]:
             return False  # fixed by the witness: its value sigma0 is attained and maximal
         before = (self.values[c], self.results.get(c))
         starts = distinct_maps([repair_fixing(t, c) for t in self.donor_maps])
@@ -458,7 +478,7 @@ class _HeatMapRun:
             if self.pruned[c]:  # the returned argmin is never a pruned candidate
                 self.pruned[c] = self.evaluate(c, math.inf)
                 continue
-            if self.verified[c] or self.rounds >= self.opts.max_verify or self.moved[c] == 0.0:
+            if self.verified[c] or self.rounds >= self.opts.max_verify or self.settled[c]:
                 return c
             self.verify(c, self.runner_up(c))
 
