@@ -20,7 +20,8 @@ heat map is a lower bound per candidate, assembled in four steps:
    compiled local search is re-run from these starts only, with L ∪ {p} fixed
    (``WarmPolisher``).
 3. **Floor.**  The best single swap of two samples avoiding L ∪ {p}, for every p at
-   once from one O(N³) table (``swap_scores``): heat[p] ≥ it.
+   once from one O(N³) table (``swap_floor``): heat[p] ≥ it.  With a budget only the
+   swaps within it whose distance rows at L ∪ {p} stay within budget / N count.
 4. **Re-solves.**  The candidates the witness maps move farthest
    (max over maps of D[p, T(p)]) are where fixing p hurts the witness most and where
    the argmin lies; the ``resolve_fraction`` (default 20 %) of them with the largest
@@ -120,6 +121,8 @@ N_CROSS = 24
 MAX_VERIFY = 8
 #: Candidates of an unpruned heat map searched at once by parallel threads.
 CHUNK = 8
+#: Swaps looked at a time for every candidate by ``best_swap_within``.
+SWAP_CHUNK = 256
 
 
 @dataclass(frozen=True)
@@ -183,13 +186,23 @@ def swap_scores(D: np.ndarray, n: int) -> np.ndarray:
     return s
 
 
-def swap_table(D: np.ndarray, n: int, budget=None) -> np.ndarray:
+def swap_table(D: np.ndarray, n: int, budget=None, landmarks=()) -> np.ndarray:
     """Value of every single swap (a b) in the units of the heat map: σ (``swap_scores``),
-    or with a Dist² ``budget`` sqrt(d²) = sqrt(2)·D[a,b] for the swaps within it and 0 for the others."""
+    or with a Dist² ``budget`` sqrt(d²) = sqrt(2)·D[a,b] for the swaps within it whose distance
+    rows at the ``landmarks`` stay within budget / n too, and 0 for the others.
+
+    The row of a landmark l under the swap (a b) (``objective.anchor_rows``) is
+    2 (D[l,a] − D[l,b])²: a swap within the Dist² budget can break it (δ(ε)'s problem,
+    ``symmetry.scale``), and is then no map of the problem with l fixed.
+    """
     if budget is None:
         return swap_scores(D, n)
-    num, den = swap_terms(np.asarray(D, float)[:n, :n], np.arange(n))
-    S = np.where(den <= budget, np.sqrt(num), 0.0)
+    Dx = np.asarray(D, float)[:n, :n]
+    num, den = swap_terms(Dx, np.arange(n))
+    ok = den <= budget
+    for l in landmarks:
+        ok &= 2.0 * (Dx[l][:, None] - Dx[l][None, :]) ** 2 <= budget / n
+    S = np.where(ok, np.sqrt(num), 0.0)
     np.fill_diagonal(S, 0.0)
     return S
 
@@ -214,6 +227,47 @@ def best_swap_avoiding(S: np.ndarray, fixed, candidates) -> np.ndarray:
     cand = np.asarray(list(candidates), dtype=np.int64)
     res = np.where((cand == a) | (cand == b), out[cand], top)
     return np.maximum(res, 0.0)
+
+
+def best_swap_within(S: np.ndarray, D: np.ndarray, fixed, candidates, row_budget: float) -> np.ndarray:
+    """For each candidate p, the best value of ``S`` (``swap_table`` with a budget and the landmarks
+    ``fixed``) over the swaps (a b) avoiding ``fixed`` ∪ {p} whose row at p, 2 (D[p,a] − D[p,b])²,
+    stays within ``row_budget``: the single-swap floor of δ(ε) with p added as a landmark (0 if none).
+
+    The swaps are walked best first, ``SWAP_CHUNK`` at a time for every candidate still without
+    one: O(N) a candidate and swap looked at, most candidates settled by the first chunk.
+    """
+    S = np.array(S, dtype=float, copy=True)
+    fixed = list(fixed)
+    S[fixed, :] = 0.0
+    S[:, fixed] = 0.0
+    a, b = np.nonzero(S > 0.0)
+    v = S[a, b]
+    order = np.lexsort((b, a, -v))  # best first; ties by index, deterministic
+    a, b, v = a[order], b[order], v[order]
+    cand = np.asarray(list(candidates), dtype=np.int64)
+    out = np.zeros(cand.size)
+    todo = np.arange(cand.size)
+    for k0 in range(0, v.size, SWAP_CHUNK):
+        if todo.size == 0:
+            break
+        pa, pb, p = a[k0:k0 + SWAP_CHUNK], b[k0:k0 + SWAP_CHUNK], cand[todo][:, None]
+        ok = (2.0 * (D[p, pa] - D[p, pb]) ** 2 <= row_budget) & (p != pa) & (p != pb)
+        hit = ok.any(axis=1)
+        out[todo[hit]] = v[k0 + np.argmax(ok[hit], axis=1)]
+        todo = todo[~hit]
+    return out
+
+
+def swap_floor(D: np.ndarray, n: int, landmarks, candidates, budget=None) -> np.ndarray:
+    """Step 3 of the heat map: for each candidate p, the best single swap of samples avoiding the
+    ``landmarks`` ∪ {p}, in the heat map's units (``swap_table``), a lower bound of its value: on σ
+    any such swap (``best_swap_avoiding``); with a budget only those within it, the landmarks' and
+    p's distance rows included (``best_swap_within``)."""
+    if budget is None:
+        return best_swap_avoiding(swap_scores(D, n), landmarks, candidates)
+    S = swap_table(D, n, budget, landmarks)
+    return best_swap_within(S, np.asarray(D, float), landmarks, candidates, budget / n)
 
 
 def repair_fixing(t: np.ndarray, p: int) -> np.ndarray:
@@ -332,7 +386,7 @@ class _HeatMapRun:
         for t in maps:
             self.moved = np.maximum(self.moved, D[np.arange(n), t])
         self.floor = np.zeros(n)
-        self.floor[cand] = best_swap_avoiding(swap_table(D, n, budget), L, cand)  # step 3
+        self.floor[cand] = swap_floor(D, n, L, cand, budget)  # step 3
         self.results = {}
         self.best_t = maps[0]
         self.credited = self._credited(cand)  # step 1
@@ -523,7 +577,7 @@ def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = 
 
 
 def _swap_witness(D, n, L, base, budget=None):
-    S = swap_table(D, n, budget)
+    S = swap_table(D, n, budget, L)
     S[L, :] = -np.inf
     S[:, L] = -np.inf
     np.fill_diagonal(S, -np.inf)
