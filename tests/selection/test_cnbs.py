@@ -226,3 +226,92 @@ def test_cut_verifications_choose_what_full_ones_do(monkeypatch):
             want = cnbs_landmarks(D, n, 4, **kw)
         assert got["landmarks"] == want["landmarks"] and got["scores"] == want["scores"]
     assert calls["cut"] and calls["complete"]  # otherwise this test tests nothing
+
+
+def _plane_points(n, seed):
+    p = np.random.default_rng(seed).uniform(size=(n, 2))
+    return _dist(p)
+
+
+def _feasible_for(D, t, landmarks, budget):
+    """``t`` is a map of δ(ε)'s problem with ``landmarks`` fixed: it fixes them, stays within the Dist²
+    budget and keeps every landmark row within budget / N (``symmetry.scale``)."""
+    from shapecond.symmetry import objective as obj
+
+    n = len(t)
+    return (all(t[landmarks] == landmarks) and obj.dist2(D, t) <= budget
+            and float(np.max(obj.anchor_rows(D, t, landmarks))) <= budget / n)
+
+
+# (seed, ε in units of the sample spacing, landmarks): instances where, before the fix, a candidate
+# was credited the previous map, which fixes it but breaks its row budget (seeds 1 and 4), or given a
+# single-swap floor that breaks a landmark's or its own row budget (seeds 0 and 2)
+_ROW_CASES = [(1, 1.0, 1), (4, 0.5, 1), (0, 2.0, 2), (2, 0.5, 1)]
+
+
+@pytest.mark.parametrize("prune", [False, True])
+@pytest.mark.parametrize("seed, factor, n_landmarks", _ROW_CASES)
+def test_scale_heat_values_are_lower_bounds_of_each_candidates_problem(seed, factor, n_landmarks, prune):
+    """On δ(ε) (a budget) each heat value is at most the exact optimum of the problem with the candidate
+    added as a landmark, its distance row's budget included (enumeration of every map, N = 7), and the
+    search result credited to a candidate attains its value with a map feasible for that problem."""
+    from shapecond.symmetry.scale import budget_of, default_epsilon
+    from tests.helpers import brute_delta
+
+    n = 7
+    D = _plane_points(n, seed)
+    eps = factor * default_epsilon(D)
+    budget = budget_of(eps, n, D)
+    L = list(range(n_landmarks))
+    hm = heat_map(D, n, L, budget=budget, options=HeatMapOptions(effort="quick", prune=prune))
+    for p in range(n_landmarks, n):
+        exact = brute_delta(D, eps, L + [p]) * math.sqrt(n)  # heat values are sqrt(d²) = sqrt(N)·δ
+        assert hm.values[p] <= exact + 1e-9, (p, hm.values[p], exact)
+        r = hm.results.get(p)
+        if r is not None:
+            assert _feasible_for(D, np.asarray(r.witness), L + [p], budget), p
+
+
+def test_scale_heat_map_credits_the_previous_map_only_within_the_candidates_row_budget():
+    """The previous step's map fixes candidate 4 but distorts its distances beyond the row budget that
+    fixing 4 adds: crediting it gave 4 the previous value (1.440), above the exact optimum (1.165)."""
+    from shapecond.symmetry import objective as obj
+    from shapecond.symmetry.scale import budget_of, default_epsilon
+    from shapecond.symmetry.search import witness_search
+    from tests.helpers import brute_delta
+
+    n, p = 7, 4
+    D = _plane_points(n, 1)
+    eps = default_epsilon(D)
+    budget = budget_of(eps, n, D)
+    base = witness_search(D, n, [0], effort="quick", budget=budget)
+    prev = np.asarray(base.witness)
+    assert prev[p] == p and obj.anchor_rows(D, prev, [p])[0] > budget / n  # the premise
+    hm = heat_map(D, n, [0], base=base, budget=budget, options=HeatMapOptions(effort="quick"))
+    assert hm.values[p] <= brute_delta(D, eps, [0, p]) * math.sqrt(n) + 1e-9
+    assert hm.values[p] < base.sigma and _feasible_for(D, np.asarray(hm.results[p].witness), [0, p], budget)
+
+
+def test_scale_swap_floor_brute_force():
+    """With a budget the floor of each candidate p is the widest single swap of the problem with p added
+    as a landmark: within the Dist² budget, every landmark's row and p's row within budget / N."""
+    from shapecond.selection.cnbs import swap_floor
+    from shapecond.symmetry import objective as obj
+    from shapecond.symmetry.scale import budget_of, default_epsilon
+
+    n = 10
+    D = _plane_points(n, 6)
+    for factor in (0.5, 1.0, 2.0):
+        budget = budget_of(factor * default_epsilon(D), n, D)
+        for L in ([], [2], [2, 7]):
+            cand = [p for p in range(n) if p not in L]
+            got = swap_floor(D, n, L, cand, budget)
+            for p, g in zip(cand, got):
+                want = 0.0
+                for a in range(n):
+                    for b in range(a + 1, n):
+                        t = np.arange(n)
+                        t[a], t[b] = b, a
+                        if a not in L + [p] and b not in L + [p] and _feasible_for(D, t, L + [p], budget):
+                            want = max(want, math.sqrt(obj.d2(D, t)))
+                assert math.isclose(g, want, rel_tol=1e-9, abs_tol=1e-12), (factor, L, p, g, want)

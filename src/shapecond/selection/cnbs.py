@@ -9,15 +9,19 @@ scores after each landmark form the "vector of symmetry scores" of Section 6.
 heat map is a lower bound per candidate, assembled in four steps:
 
 1. **Fixed by the witness.**  If the best witness map T of the previous step already
-   fixes p (T(p) = p, e.g. p on the mirror plane of a mirror witness), T is feasible
-   with p fixed, so the bound does not move: heat[p] = σ_L.  No search is run.
+   fixes p (T(p) = p, e.g. p on the mirror plane of a mirror witness) and, on the
+   scale-aware score (``budget``), keeps p's distance row within budget / N (the
+   constraint p adds as a landmark: ``objective.anchor_rows``, O(N)), T is feasible with
+   p fixed, so the bound does not move: heat[p] = σ_L.  No search is run.  A T that fixes
+   p but breaks its row is not a map of p's problem: p is searched as the others are.
 2. **Warm start.**  Otherwise each of the best ``n_maps`` distinct witness maps is
    repaired by one move so that T(p) = p (swap p with its pre-image q, T(q) := T(p);
    or, with dense targets when p is nobody's image, reassign T(p) := p), and the
    compiled local search is re-run from these starts only, with L ∪ {p} fixed
    (``WarmPolisher``).
 3. **Floor.**  The best single swap of two samples avoiding L ∪ {p}, for every p at
-   once from one O(N³) table (``swap_scores``): heat[p] ≥ it.
+   once from one O(N³) table (``swap_floor``): heat[p] ≥ it.  With a budget only the
+   swaps within it whose distance rows at L ∪ {p} stay within budget / N count.
 4. **Re-solves.**  The candidates the witness maps move farthest
    (max over maps of D[p, T(p)]) are where fixing p hurts the witness most and where
    the argmin lies; the ``resolve_fraction`` (default 20 %) of them with the largest
@@ -94,6 +98,7 @@ import numpy as np
 from ..checks import check_landmark_count
 from ..errors import InputError
 from ..threads import single_blas_thread
+from ..symmetry import objective as obj
 from ..symmetry.objective import isometry_floor, swap_terms
 from ..symmetry.scale import resolution
 from ..symmetry.search import witness_search
@@ -116,6 +121,8 @@ N_CROSS = 24
 MAX_VERIFY = 8
 #: Candidates of an unpruned heat map searched at once by parallel threads.
 CHUNK = 8
+#: Swaps looked at a time for every candidate by ``best_swap_within``.
+SWAP_CHUNK = 256
 
 
 @dataclass(frozen=True)
@@ -179,13 +186,23 @@ def swap_scores(D: np.ndarray, n: int) -> np.ndarray:
     return s
 
 
-def swap_table(D: np.ndarray, n: int, budget=None) -> np.ndarray:
+def swap_table(D: np.ndarray, n: int, budget=None, landmarks=()) -> np.ndarray:
     """Value of every single swap (a b) in the units of the heat map: σ (``swap_scores``),
-    or with a Dist² ``budget`` sqrt(d²) = sqrt(2)·D[a,b] for the swaps within it and 0 for the others."""
+    or with a Dist² ``budget`` sqrt(d²) = sqrt(2)·D[a,b] for the swaps within it whose distance
+    rows at the ``landmarks`` stay within budget / n too, and 0 for the others.
+
+    The row of a landmark l under the swap (a b) (``objective.anchor_rows``) is
+    2 (D[l,a] − D[l,b])²: a swap within the Dist² budget can break it (δ(ε)'s problem,
+    ``symmetry.scale``), and is then no map of the problem with l fixed.
+    """
     if budget is None:
         return swap_scores(D, n)
-    num, den = swap_terms(np.asarray(D, float)[:n, :n], np.arange(n))
-    S = np.where(den <= budget, np.sqrt(num), 0.0)
+    Dx = np.asarray(D, float)[:n, :n]
+    num, den = swap_terms(Dx, np.arange(n))
+    ok = den <= budget
+    for l in landmarks:
+        ok &= 2.0 * (Dx[l][:, None] - Dx[l][None, :]) ** 2 <= budget / n
+    S = np.where(ok, np.sqrt(num), 0.0)
     np.fill_diagonal(S, 0.0)
     return S
 
@@ -210,6 +227,47 @@ def best_swap_avoiding(S: np.ndarray, fixed, candidates) -> np.ndarray:
     cand = np.asarray(list(candidates), dtype=np.int64)
     res = np.where((cand == a) | (cand == b), out[cand], top)
     return np.maximum(res, 0.0)
+
+
+def best_swap_within(S: np.ndarray, D: np.ndarray, fixed, candidates, row_budget: float) -> np.ndarray:
+    """For each candidate p, the best value of ``S`` (``swap_table`` with a budget and the landmarks
+    ``fixed``) over the swaps (a b) avoiding ``fixed`` ∪ {p} whose row at p, 2 (D[p,a] − D[p,b])²,
+    stays within ``row_budget``: the single-swap floor of δ(ε) with p added as a landmark (0 if none).
+
+    The swaps are walked best first, ``SWAP_CHUNK`` at a time for every candidate still without
+    one: O(N) a candidate and swap looked at, most candidates settled by the first chunk.
+    """
+    S = np.array(S, dtype=float, copy=True)
+    fixed = list(fixed)
+    S[fixed, :] = 0.0
+    S[:, fixed] = 0.0
+    a, b = np.nonzero(S > 0.0)
+    v = S[a, b]
+    order = np.lexsort((b, a, -v))  # best first; ties by index, deterministic
+    a, b, v = a[order], b[order], v[order]
+    cand = np.asarray(list(candidates), dtype=np.int64)
+    out = np.zeros(cand.size)
+    todo = np.arange(cand.size)
+    for k0 in range(0, v.size, SWAP_CHUNK):
+        if todo.size == 0:
+            break
+        pa, pb, p = a[k0:k0 + SWAP_CHUNK], b[k0:k0 + SWAP_CHUNK], cand[todo][:, None]
+        ok = (2.0 * (D[p, pa] - D[p, pb]) ** 2 <= row_budget) & (p != pa) & (p != pb)
+        hit = ok.any(axis=1)
+        out[todo[hit]] = v[k0 + np.argmax(ok[hit], axis=1)]
+        todo = todo[~hit]
+    return out
+
+
+def swap_floor(D: np.ndarray, n: int, landmarks, candidates, budget=None) -> np.ndarray:
+    """Step 3 of the heat map: for each candidate p, the best single swap of samples avoiding the
+    ``landmarks`` ∪ {p}, in the heat map's units (``swap_table``), a lower bound of its value: on σ
+    any such swap (``best_swap_avoiding``); with a budget only those within it, the landmarks' and
+    p's distance rows included (``best_swap_within``)."""
+    if budget is None:
+        return best_swap_avoiding(swap_scores(D, n), landmarks, candidates)
+    S = swap_table(D, n, budget, landmarks)
+    return best_swap_within(S, np.asarray(D, float), landmarks, candidates, budget / n)
 
 
 def repair_fixing(t: np.ndarray, p: int) -> np.ndarray:
@@ -328,9 +386,12 @@ class _HeatMapRun:
         for t in maps:
             self.moved = np.maximum(self.moved, D[np.arange(n), t])
         self.floor = np.zeros(n)
-        self.floor[cand] = best_swap_avoiding(swap_table(D, n, budget), L, cand)  # step 3
+        self.floor[cand] = swap_floor(D, n, L, cand, budget)  # step 3
         self.results = {}
         self.best_t = maps[0]
+        self.credited = self._credited(cand)  # step 1
+        # every warm map fixes p and the best is feasible with p fixed: nothing to verify (step 5)
+        self.settled = self.credited & (self.moved == 0.0)
         self.polish = WarmPolisher(D, n, maps, L, budget)
         n_full = int(math.ceil(opts.resolve_fraction * cand.size))
         self.order = cand[np.lexsort((cand, -self.moved[cand]))]  # the tie-break order of HeatMap.argmin
@@ -348,6 +409,19 @@ class _HeatMapRun:
             self.tie = math.sqrt(n) * resolution(D, n)
             self.spread = D[:n, L].min(axis=1)
 
+    def _credited(self, cand) -> np.ndarray:
+        """Step 1: True for the candidates whose problem the best base map is feasible for, so that
+        its value σ_L is theirs: it fixes p and, with a budget, keeps p's distance row within
+        budget / N (the constraint p adds as a landmark, ``objective.anchor_rows``; its other
+        constraints are those of L, which the base map meets).  O(N) a candidate."""
+        t, n = self.best_t, self.n
+        ok = np.zeros(n, dtype=bool)
+        ok[cand] = t[cand] == cand
+        if self.budget is not None and ok.any():
+            fixed = np.flatnonzero(ok)
+            ok[fixed] = obj.anchor_rows(self.D, t, fixed) <= self.budget / n
+        return ok
+
     def take(self, p, r):
         """Keep the search result ``r`` for candidate ``p`` if it raises its bound."""
         if r is not None and (float(r.sigma) > self.values[p] or p not in self.results):
@@ -357,7 +431,7 @@ class _HeatMapRun:
     def evaluate(self, p, stop):
         """Steps 1, 2 and 4 for candidate p; True when cut short above ``stop``."""
         opts, L = self.opts, self.L
-        if self.best_t[p] == p:  # 1. fixed by the witness
+        if self.credited[p]:  # 1. fixed by the witness, within p's row budget
             self.values[p] = max(self.sigma0, self.floor[p])
             self.results[p] = self.base
             return False
@@ -410,7 +484,7 @@ class _HeatMapRun:
         if count:
             self.verified[c] = True
             self.rounds += 1
-        if self.moved[c] == 0.0:
+        if self.settled[c]:
             return False  # fixed by the witness: its value sigma0 is attained and maximal
         before = (self.values[c], self.results.get(c))
         starts = distinct_maps([repair_fixing(t, c) for t in self.donor_maps])
@@ -458,7 +532,7 @@ class _HeatMapRun:
             if self.pruned[c]:  # the returned argmin is never a pruned candidate
                 self.pruned[c] = self.evaluate(c, math.inf)
                 continue
-            if self.verified[c] or self.rounds >= self.opts.max_verify or self.moved[c] == 0.0:
+            if self.verified[c] or self.rounds >= self.opts.max_verify or self.settled[c]:
                 return c
             self.verify(c, self.runner_up(c))
 
@@ -503,7 +577,7 @@ def full_heat_map(D, n_samples=None, landmarks=(), seed: int = 0, effort: str = 
 
 
 def _swap_witness(D, n, L, base, budget=None):
-    S = swap_table(D, n, budget)
+    S = swap_table(D, n, budget, L)
     S[L, :] = -np.inf
     S[:, L] = -np.inf
     np.fill_diagonal(S, -np.inf)
