@@ -51,9 +51,9 @@ LANDMARK_PARAMS = (*SHAPE_OPTIONS, K, METHOD,
 HEATMAP_PARAMS = (*SHAPE_OPTIONS, Param("landmarks", Ids(), (), "Vertex ids already fixed: " + IDS_HELP + ".",
                                         cli=("--landmarks",)),
                   EFFORT, RESOLVE, HEATMAP_SCORE, EPSILON.in_context("--score scale: "), PROGRESS)
-#: The options of ``kappa``, each declared once (``params``).
 #: kappa's N: ``DEFAULT_KAPPA_POINTS`` free samples of a mesh by default (its probes enumerate every map).
 KAPPA_POINTS = replace(POINTS, cli_default=f"{DEFAULT_KAPPA_POINTS} + the landmarks for a mesh, every point of a matrix")
+#: The options of ``kappa``, each declared once (``params``).
 KAPPA_PARAMS = (KAPPA_POINTS, *(p for p in SHAPE_OPTIONS if p is not POINTS), FIXED_LANDMARKS,
                 Param("trials", IntRange(1), 20, "Number of perturbed copies probed.", cli=("--trials",)),
                 Param("scale", FloatRange(0, 10, lo_open=True), 0.05,
