@@ -44,6 +44,14 @@ remeshed classes the rule changed one of 40 all-landmark results, for the worse
 legs with PLS's landmarks (SMAL_r muybridge_097_01: 142 → 78 ×10⁻³ sqrt(area); the other 31 rows of 8
 animals × 4 methods within ±5), but between poses it lost (TOSCA_r, one test pair per class, CNBS's
 6 landmarks 32.2 → 36.0, cat2 → cat3 75 → 93; FPS's, PLS's and HKS's within ±0.8).
+
+Between species the sample map, not the dense stage, is where the error is made: on the cow to 8
+SMAL_r animals (FPS, PLS and CNBS landmarks, 6 exact: 24 rows) the true sample map snapped to the
+target's samples and extended by ``dense.dense_map`` errs 21.3 ×10⁻³ sqrt(area), FAQ's sample map
+extended the same way 84.5, and the dense stage takes FAQ's to 45.7.  Tried and not adopted: the dense
+stage's map read back at the samples (a linear assignment to the target's samples) as the start of FAQ
+on the distance or the local objective, then extended, then one whole-basis ZoomOut level: 52.8–80.6 on
+the same rows (the sample objectives move the start away from the truth).
 """
 
 from __future__ import annotations
