@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from shapecond.selection.cnbs import (CNBSOptions, HeatMap, HeatMapOptions, best_swap_avoiding, cnbs_landmarks, heat_map, repair_fixing,
-                                      swap_scores)
+from shapecond.selection.cnbs import CNBSOptions, HeatMap, HeatMapOptions, cnbs_landmarks, heat_map, repair_fixing
+from shapecond.selection.swap_floor import best_swap_avoiding, swap_floor, swap_scores
 from shapecond.symmetry.exact import exact_sigma
 from shapecond.symmetry.objective import map_score
 
@@ -295,7 +295,6 @@ def test_scale_heat_map_credits_the_previous_map_only_within_the_candidates_row_
 def test_scale_swap_floor_brute_force():
     """With a budget the floor of each candidate p is the widest single swap of the problem with p added
     as a landmark: within the Dist² budget, every landmark's row and p's row within budget / N."""
-    from shapecond.selection.cnbs import swap_floor
     from shapecond.symmetry import objective as obj
     from shapecond.symmetry.scale import budget_of, default_epsilon
 
